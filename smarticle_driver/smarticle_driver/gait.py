@@ -1,0 +1,210 @@
+"""The smarticle square gait (paper Fig. 1(b)): a pure, clock-agnostic state machine.
+
+Convention (drawn in docs/gait.md):
+
+* Body frame: x along the body from joint 1 to joint 2, y = the body normal (the robot's heading).
+  Arm 1 hangs on the -x end, arm 2 on the +x end.
+* ``alpha_i = 0``: arm i straight, in line with the body. ``alpha_i > 0``: the arm's tip turned
+  toward +y (the normal side). Both arms at ``+alpha_max`` make a U that opens toward +y.
+* Corners, visited in this order (counter-clockwise in the (alpha1, alpha2) plane)::
+
+      c0 = (+a, +a) -> c1 = (-a, +a) -> c2 = (-a, -a) -> c3 = (+a, -a) -> c0
+
+  Quarter q of a period moves one arm only, from c_q to c_(q+1): arm 1 in quarters 0 and 2, arm 2
+  in quarters 1 and 3, at most at the servo speed, then holds until the quarter ends.
+* Gait time ``tau = (t - t_start) / T + phase`` counts periods; a robot with phase 0 is at c0 at the
+  shared start time, and the one-arm move of quarter 0 (arm 1, + to -) begins there.
+* Halt: both arms hold where they are now. At the start of the next period (the next whole tau) the
+  gait resumes with quarter 0; every move starts from the arm's held position toward its next corner.
+
+Times are plain seconds from any clock (wall or simulated) and must not go backwards.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+#: Arm index moved in each quarter of the period.
+MOVING_ARM: tuple[int, int, int, int] = (0, 1, 0, 1)
+#: Corner signs (alpha1, alpha2) in traversal order.
+CORNER_SIGNS: tuple[tuple[int, int], ...] = ((1, 1), (-1, 1), (-1, -1), (1, -1))
+
+ALPHA_MAX_RANGE_DEG = (5.0, 120.0)
+DEFAULT_PERIOD = 1.6
+#: Default servo speed: 0.1 s per 60 degrees (a common hobby-servo rating), which lets a 120 degree
+#: amplitude (240 degree stroke) finish within a 0.4 s quarter.
+DEFAULT_SERVO_SPEED = math.radians(60.0) / 0.1
+
+
+class GaitError(ValueError):
+    """An invalid gait setting or call."""
+
+
+@dataclass(frozen=True)
+class GaitConfig:
+    """Square-gait settings, SI units (radians, seconds)."""
+
+    alpha_max: float = math.radians(90.0)
+    period: float = DEFAULT_PERIOD
+    servo_speed: float = DEFAULT_SERVO_SPEED
+    phase: float = 0.0
+
+    def __post_init__(self) -> None:
+        lo, hi = (math.radians(v) for v in ALPHA_MAX_RANGE_DEG)
+        if not (math.isfinite(self.alpha_max) and lo - 1e-12 <= self.alpha_max <= hi + 1e-12):
+            raise GaitError(f'alpha_max must be {ALPHA_MAX_RANGE_DEG[0]:g} to {ALPHA_MAX_RANGE_DEG[1]:g} '
+                            f'degrees, got {math.degrees(self.alpha_max):g}')
+        if not (math.isfinite(self.period) and self.period > 0.0):
+            raise GaitError(f'period must be a positive number of seconds, got {self.period!r}')
+        if not (math.isfinite(self.servo_speed) and self.servo_speed > 0.0):
+            raise GaitError(f'servo_speed must be positive (rad/s), got {self.servo_speed!r}')
+        if not (math.isfinite(self.phase) and 0.0 <= self.phase < 1.0):
+            raise GaitError(f'phase must be a fraction of a period in [0, 1), got {self.phase!r}')
+        stroke_time = 2.0 * self.alpha_max / self.servo_speed
+        if stroke_time > self.period / 4.0 + 1e-9:
+            raise GaitError(
+                f'a {math.degrees(2 * self.alpha_max):g} degree stroke at {self.servo_speed:g} rad/s takes '
+                f'{stroke_time:.3f} s, longer than a quarter period ({self.period / 4:.3f} s): '
+                'raise servo_speed or period, or lower alpha_max')
+
+    @classmethod
+    def from_degrees(cls, alpha_max_deg: float, period: float = DEFAULT_PERIOD,
+                     servo_speed: float = DEFAULT_SERVO_SPEED, phase: float = 0.0) -> GaitConfig:
+        """Build a config with the amplitude given in degrees."""
+        return cls(math.radians(alpha_max_deg), period, servo_speed, phase)
+
+    def corner(self, index: int) -> tuple[float, float]:
+        """Return corner ``index`` (0..3) as (alpha1, alpha2) in radians."""
+        s1, s2 = CORNER_SIGNS[index % 4]
+        return (s1 * self.alpha_max, s2 * self.alpha_max)
+
+
+@dataclass(frozen=True)
+class GaitCommand:
+    """What the gait asks of the servos at one instant."""
+
+    targets: tuple[float, float]     # commanded arm angles (rad): the corner being approached
+    positions: tuple[float, float]   # reference arm angles now (rad), following the speed limit
+    speed: float                     # servo speed limit (rad/s)
+    started: bool
+    halted: bool
+    period_index: int                # whole periods of gait time (-1 before the start)
+    quarter: int                     # quarter of the period (0..3)
+
+
+class SquareGait:
+    """Square-gait state machine for one robot; feed it times from one clock, in order."""
+
+    def __init__(self, config: GaitConfig) -> None:
+        self.config = config
+        self._start_time: float | None = None
+        self._reset()
+
+    def _reset(self) -> None:
+        phase = self.config.phase
+        self._quarter_count = math.floor(4.0 * phase)          # global quarter number at _tau_event
+        self._tau_event = self._quarter_count / 4.0
+        self._pos0 = self.config.corner(self._quarter_count % 4)
+        self._halted = False
+        self._resume_tau = 0.0
+        self._last_tau = phase
+        self._start_pose = self._position(phase)
+
+    @property
+    def start_time(self) -> float | None:
+        """The shared start time (s), or None before a start."""
+        return self._start_time
+
+    @property
+    def halted(self) -> bool:
+        """True while the arms hold after a halt."""
+        return self._halted
+
+    def start(self, t0: float) -> None:
+        """(Re)start the gait at time ``t0``; a new start resets any halt."""
+        if not math.isfinite(t0):
+            raise GaitError(f'start time must be finite, got {t0!r}')
+        self._start_time = float(t0)
+        self._reset()
+
+    def gait_time(self, t: float) -> float:
+        """Return the gait time tau (in periods) at clock time ``t``."""
+        if self._start_time is None:
+            return self.config.phase
+        return max(t - self._start_time, 0.0) / self.config.period + self.config.phase
+
+    def halt(self, t: float) -> bool:
+        """Hold the arms at time ``t``; return False if the gait was not running or already halted."""
+        if self._start_time is None or t < self._start_time or self._halted:
+            return False
+        tau = self._advance(t)
+        self._pos0 = self._position(tau)
+        self._tau_event = tau
+        self._halted = True
+        self._resume_tau = math.floor(tau) + 1.0
+        return True
+
+    def command(self, t: float) -> GaitCommand:
+        """Return the servo command at clock time ``t``."""
+        speed = self.config.servo_speed
+        if self._start_time is None or t < self._start_time:
+            pose = self._start_pose
+            return GaitCommand(pose, pose, speed, False, False, -1, self._quarter_count % 4)
+        tau = self._advance(t)
+        positions = self._position(tau)
+        quarter = self._quarter_count % 4
+        if self._halted:
+            targets = self._pos0
+        else:
+            arm = MOVING_ARM[quarter]
+            goal = self.config.corner(quarter + 1)[arm]
+            targets = (goal, positions[1]) if arm == 0 else (positions[0], goal)
+        return GaitCommand(targets, positions, speed, True, self._halted,
+                           math.floor(tau), quarter)
+
+    def _advance(self, t: float) -> float:
+        """Move the state machine through every quarter boundary up to clock time ``t``."""
+        tau = self.gait_time(t)
+        if tau < self._last_tau - 1e-12:
+            raise GaitError(f'time went backwards: gait time {tau:.6f} after {self._last_tau:.6f}')
+        self._last_tau = tau
+        while True:
+            boundary = (self._quarter_count + 1) / 4.0
+            if boundary > tau:
+                return tau
+            if self._halted:
+                if boundary >= self._resume_tau:
+                    self._halted = False   # resume from the held pose with quarter 0
+            else:
+                self._pos0 = self._position(boundary)
+            self._quarter_count += 1
+            self._tau_event = boundary
+
+    def _position(self, tau: float) -> tuple[float, float]:
+        """Reference arm angles at gait time ``tau`` within the current quarter."""
+        if self._halted:
+            return self._pos0
+        quarter = self._quarter_count % 4
+        arm = MOVING_ARM[quarter]
+        goal = self.config.corner(quarter + 1)[arm]
+        start = self._pos0[arm]
+        reach = self.config.servo_speed * self.config.period * max(tau - self._tau_event, 0.0)
+        delta = goal - start
+        moved = goal if abs(delta) <= reach else start + math.copysign(reach, delta)
+        return (moved, self._pos0[1]) if arm == 0 else (self._pos0[0], moved)
+
+
+def open_loop_angles(config: GaitConfig, tau: float) -> tuple[float, float]:
+    """Arm angles of an unhalted gait at gait time ``tau`` (periods), in closed form."""
+    if not math.isfinite(tau) or tau < 0.0:
+        raise GaitError(f'gait time must be finite and >= 0, got {tau!r}')
+    count = math.floor(4.0 * tau)
+    quarter = count % 4
+    arm = MOVING_ARM[quarter]
+    start = config.corner(quarter)
+    goal = config.corner(quarter + 1)[arm]
+    reach = config.servo_speed * config.period * (tau - count / 4.0)
+    delta = goal - start[arm]
+    moved = goal if abs(delta) <= reach else start[arm] + math.copysign(reach, delta)
+    return (moved, start[1]) if arm == 0 else (start[0], moved)

@@ -1,0 +1,72 @@
+"""Declared ROS parameters from one table: names, defaults, descriptions and ranges, read into a dict.
+
+A node lists its parameters once as ``ParamSpec`` rows; ``declare_and_read`` declares them with their
+descriptions and returns the values, and ``defaults_yaml`` renders the shipped YAML file of defaults
+(a test checks each package's ``config/*.yaml`` against its table). Imports rclpy only when declaring.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import yaml
+
+
+class ParameterError(ValueError):
+    """A parameter value that is missing, of the wrong type or out of range."""
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """One declared parameter: name, default value (its type is the parameter's type), meaning."""
+
+    name: str
+    default: Any
+    description: str
+    minimum: float | None = None
+    maximum: float | None = None
+
+    def check(self, value: Any, source: str = 'parameter') -> Any:
+        """Return ``value`` if it has the default's type and lies in range, else raise ParameterError."""
+        want = type(self.default)
+        if want is float and isinstance(value, int) and not isinstance(value, bool):
+            value = float(value)
+        if not isinstance(value, want) or (want is int and isinstance(value, bool)):
+            raise ParameterError(f'{source} {self.name!r}: expected {want.__name__}, got {value!r}')
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            if value != value:
+                raise ParameterError(f'{source} {self.name!r}: NaN is not allowed')
+            if self.minimum is not None and value < self.minimum:
+                raise ParameterError(f'{source} {self.name!r}: {value} is below the minimum {self.minimum}')
+            if self.maximum is not None and value > self.maximum:
+                raise ParameterError(f'{source} {self.name!r}: {value} is above the maximum {self.maximum}')
+        return value
+
+
+def declare_and_read(node: Any, specs: tuple[ParamSpec, ...]) -> dict[str, Any]:
+    """Declare ``specs`` on an rclpy node and return their checked values by name."""
+    from rcl_interfaces.msg import ParameterDescriptor
+
+    values: dict[str, Any] = {}
+    for spec in specs:
+        descriptor = ParameterDescriptor(description=spec.description)
+        param = node.declare_parameter(spec.name, spec.default, descriptor)
+        values[spec.name] = spec.check(param.value, f'node {node.get_name()} parameter')
+    return values
+
+
+def defaults_yaml(node_name: str, specs: tuple[ParamSpec, ...]) -> str:
+    """Render the ROS parameters file of the defaults of ``specs`` for node ``node_name``."""
+    params = {spec.name: spec.default for spec in specs}
+    return yaml.safe_dump({node_name: {'ros__parameters': params}}, sort_keys=False)
+
+
+def read_defaults_yaml(path: str, node_name: str) -> dict[str, Any]:
+    """Read the ``ros__parameters`` of ``node_name`` (or ``/**``) from a ROS parameters file."""
+    with open(path, encoding='utf-8') as handle:
+        data = yaml.safe_load(handle)
+    for key in (node_name, '/**'):
+        if isinstance(data, dict) and key in data:
+            return dict(data[key]['ros__parameters'])
+    raise ParameterError(f'{path}: no section {node_name!r} with ros__parameters')

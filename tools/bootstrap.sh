@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Create (or refresh) the project's virtual environment in .venv and install everything into it:
+# the PyPI dependencies from requirements-dev.txt and the five ROS 2 packages, editable.
+# Sourced by demo.sh and test.sh; safe to run again (it only reinstalls when the project files change).
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+VENV="${SMARTICLE_VENV:-$ROOT/.venv}"
+PY="${PYTHON:-python3}"
+PACKAGES=(smarticle_driver smarticle_sim smarticle_feedback smarticle_tracking bags/smarticle_bags)
+
+stamp_of() {
+  # everything that changes what gets installed
+  (cd "$ROOT" && cat requirements.txt requirements-dev.txt tools/bootstrap.sh \
+     "${PACKAGES[@]/%//setup.py}" "${PACKAGES[@]/%//setup.cfg}" | sha256sum | cut -d' ' -f1)
+}
+
+if [ ! -x "$VENV/bin/python" ]; then
+  echo "[bootstrap] creating virtual environment $VENV"
+  if ! "$PY" -m venv "$VENV" 2>/dev/null; then
+    rm -rf "$VENV"
+    if command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
+      echo "[bootstrap] python venv module missing: installing Debian's python3-venv"
+      apt-get update -qq && apt-get install -y -qq python3-venv >/dev/null
+      "$PY" -m venv "$VENV"
+    else
+      echo "[bootstrap] error: '$PY -m venv' failed; install your distribution's python3-venv package" >&2
+      exit 1
+    fi
+  fi
+fi
+
+want="$(stamp_of)"
+have="$(cat "$VENV/.smarticle-stamp" 2>/dev/null || true)"
+if [ "$want" != "$have" ]; then
+  echo "[bootstrap] installing dependencies into $VENV (first run takes about a minute)"
+  "$VENV/bin/python" -m pip install -q --upgrade pip
+  "$VENV/bin/python" -m pip install -q -r "$ROOT/requirements-dev.txt"
+  for p in "${PACKAGES[@]}"; do
+    "$VENV/bin/python" -m pip install -q --no-deps --no-build-isolation -e "$ROOT/$p"
+  done
+  echo "$want" > "$VENV/.smarticle-stamp"
+  echo "[bootstrap] environment ready"
+fi
+export PATH="$VENV/bin:$PATH"
+export VIRTUAL_ENV="$VENV"
