@@ -1,0 +1,132 @@
+"""ROS node `gait`: runs the square gait of one robot and publishes its joint commands.
+
+Publishes ``/smarticle_<k>/joint_commands`` when the targets change and at a heartbeat;
+subscribes to ``/smarticles/start`` (synchronised start at ``header.stamp``; a zero stamp means now)
+and ``/smarticle_<k>/halt``. All timing uses the node's clock, so ``use_sim_time`` works.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.time import Time
+
+from smarticle_driver import topics
+from smarticle_driver.gait import DEFAULT_PERIOD, DEFAULT_SERVO_SPEED, GaitCommand, GaitConfig, GaitError, SquareGait
+from smarticle_driver.params import ParameterError, ParamSpec, declare_and_read
+
+NODE_NAME = 'gait'
+
+PARAMS: tuple[ParamSpec, ...] = (
+    ParamSpec('robot_id', 0, 'robot id k: topics live under /smarticle_<k>', 0, topics.MAX_ROBOT_ID),
+    ParamSpec('alpha_max_deg', 90.0, 'square-gait amplitude alpha_max in degrees (5 to 120)', 5.0, 120.0),
+    ParamSpec('period', DEFAULT_PERIOD, 'gait period T in seconds', 0.05, 60.0),
+    ParamSpec('servo_speed', DEFAULT_SERVO_SPEED, 'servo speed limit in rad/s', 0.1, 100.0),
+    ParamSpec('phase', 0.0, 'phase offset as a fraction of a period, in [0, 1)', 0.0, 0.999999),
+    ParamSpec('tick_rate', 100.0, 'how often the gait is evaluated, Hz', 1.0, 1000.0),
+    ParamSpec('heartbeat', 0.2, 'republish the unchanged command after this many seconds', 0.005, 10.0),
+    ParamSpec('autostart', False, 'start at the first tick without waiting for /smarticles/start'),
+)
+
+
+def config_from_params(values: dict[str, Any]) -> GaitConfig:
+    """Build the gait config from checked parameter values (degrees at this edge only)."""
+    try:
+        return GaitConfig.from_degrees(values['alpha_max_deg'], values['period'],
+                                       values['servo_speed'], values['phase'])
+    except GaitError as err:
+        raise ParameterError(f'node {NODE_NAME}: {err}') from err
+
+
+class GaitNode(Node):
+    """Thin ROS shell around smarticle_driver.gait.SquareGait."""
+
+    def __init__(self) -> None:
+        super().__init__(NODE_NAME)
+        values = declare_and_read(self, PARAMS)
+        self.robot_id: int = values['robot_id']
+        self.gait = SquareGait(config_from_params(values))
+        self.heartbeat = Time(seconds=values['heartbeat']).nanoseconds
+        self.autostart: bool = values['autostart']
+        self._last_targets: tuple[float, float] | None = None
+        self._last_sent_ns = 0
+        self._joint_state_type = topics.message_class('sensor_msgs/msg/JointState')
+        spec = topics.spec_of('joint_commands')
+        self.publisher = self.create_publisher(
+            self._joint_state_type, spec.resolve(self.robot_id), topics.qos_profile(spec.qos))
+        header_type = topics.message_class('std_msgs/msg/Header')
+        start = topics.spec_of('start')
+        self.create_subscription(header_type, start.resolve(), self.on_start, topics.qos_profile(start.qos))
+        halt = topics.spec_of('halt')
+        self.create_subscription(header_type, halt.resolve(self.robot_id), self.on_halt,
+                                 topics.qos_profile(halt.qos))
+        self.timer = self.create_timer(1.0 / values['tick_rate'], self.on_tick)
+        waiting = 'starting at once' if self.autostart else f'waiting for {start.resolve()}'
+        self.get_logger().info(
+            f'robot {self.robot_id}: alpha_max {values["alpha_max_deg"]:g} deg, period {values["period"]:g} s, '
+            f'phase {values["phase"]:g}; {waiting}')
+
+    def now_seconds(self) -> float:
+        """Return the node clock's time in seconds."""
+        return self.get_clock().now().nanoseconds * 1e-9
+
+    def on_start(self, msg: Any) -> None:
+        """Start (or restart) the gait at the stamped time."""
+        stamp = msg.stamp.sec + msg.stamp.nanosec * 1e-9
+        self.gait.start(stamp if stamp > 0.0 else self.now_seconds())
+        self.get_logger().info(f'gait start at t = {self.gait.start_time:.3f} s')
+        self.on_tick()
+
+    def on_halt(self, msg: Any) -> None:
+        """Hold the arms now and send the hold command at once."""
+        if self.gait.halt(self.now_seconds()):
+            self.on_tick()
+
+    def on_tick(self) -> None:
+        """Evaluate the gait and publish when the targets change or the heartbeat is due."""
+        now = self.get_clock().now()
+        if now.nanoseconds == 0:
+            return  # sim time not yet received
+        if self.autostart and self.gait.start_time is None:
+            self.gait.start(now.nanoseconds * 1e-9)
+        command = self.gait.command(now.nanoseconds * 1e-9)
+        if command.targets != self._last_targets or now.nanoseconds - self._last_sent_ns >= self.heartbeat:
+            self.publisher.publish(self.to_message(command, now))
+            self._last_targets = command.targets
+            self._last_sent_ns = now.nanoseconds
+
+    def to_message(self, command: GaitCommand, now: Time) -> Any:
+        """Convert a gait command to a JointState (position = targets, velocity = speed limits)."""
+        msg = self._joint_state_type()
+        msg.header.stamp = now.to_msg()
+        msg.name = list(topics.JOINT_NAMES)
+        msg.position = [float(a) for a in command.targets]
+        msg.velocity = [command.speed, command.speed]
+        return msg
+
+
+def main(args: list[str] | None = None) -> None:
+    """Entry point of `ros2 run smarticle_driver gait`."""
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = GaitNode()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except ParameterError as err:
+        if node is None:
+            rclpy.logging.get_logger(NODE_NAME).fatal(str(err))
+            raise SystemExit(2) from err
+        raise
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+
+
+if __name__ == '__main__':
+    main()

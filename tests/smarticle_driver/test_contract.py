@@ -1,0 +1,44 @@
+"""The topic contract: one module, one doc page, every entry resolvable and importable."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from smarticle_driver import topics
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_doc_page_shows_the_same_table_as_the_module() -> None:
+    doc = (ROOT / 'docs' / 'topics.md').read_text()
+    assert topics.markdown_table() in doc, 'regenerate with: python -m smarticle_driver.topics'
+
+
+@pytest.mark.parametrize('spec', topics.TOPICS, ids=lambda s: s.key)
+def test_every_message_type_imports_and_every_qos_builds(spec: topics.TopicSpec) -> None:
+    cls = topics.message_class(spec.type)
+    assert cls.__name__ == spec.type.rsplit('/', 1)[1]
+    assert topics.qos_profile(spec.qos).depth >= 1
+
+
+def test_per_robot_names_resolve_and_parse_back() -> None:
+    name = topics.topic('fsr', 4)
+    assert name == '/smarticle_4/fsr'
+    assert topics.parse_robot_topic(name) == (4, 'fsr')
+    assert topics.parse_robot_topic('/smarticle_4/unknown') is None
+    assert topics.topic('poses') == '/smarticles/poses'
+
+
+@pytest.mark.parametrize('bad', [-1, 1000, 1.5, '3', None, True])
+def test_invalid_robot_ids_are_refused(bad: object) -> None:
+    with pytest.raises(topics.ContractError, match='robot id'):
+        topics.topic('joint_states', bad)  # type: ignore[arg-type]
+
+
+def test_unknown_keys_and_malformed_types_are_refused() -> None:
+    with pytest.raises(topics.ContractError, match='known'):
+        topics.topic('joint_cmds', 0)
+    with pytest.raises(topics.ContractError, match='pkg/msg/Name'):
+        topics.message_class('JointState')

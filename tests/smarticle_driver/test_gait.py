@@ -1,0 +1,140 @@
+"""Unit tests of the square-gait core: corners, order, timing, speed limit, phase, halt and resume."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from smarticle_driver.gait import (CORNER_SIGNS, DEFAULT_SERVO_SPEED, GaitConfig, GaitError, SquareGait,
+                                   open_loop_angles)
+
+A = math.radians(90.0)
+
+
+def trace(gait: SquareGait, t0: float, t1: float, dt: float = 0.001) -> tuple[np.ndarray, np.ndarray]:
+    """Sample the gait's reference positions on [t0, t1)."""
+    times = np.arange(t0, t1, dt)
+    return times, np.array([gait.command(float(t)).positions for t in times])
+
+
+def test_corners_are_visited_in_documented_order() -> None:
+    gait = SquareGait(GaitConfig(alpha_max=A, period=1.6))
+    gait.start(0.0)
+    ends = [gait.command(0.4 * q + 0.399).positions for q in range(4)]
+    expected = [(s1 * A, s2 * A) for s1, s2 in CORNER_SIGNS[1:] + CORNER_SIGNS[:1]]
+    assert np.allclose(ends, expected)
+
+
+def test_one_arm_moves_at_a_time_and_never_faster_than_servo_speed() -> None:
+    config = GaitConfig(alpha_max=A, period=1.6, servo_speed=DEFAULT_SERVO_SPEED)
+    gait = SquareGait(config)
+    gait.start(0.0)
+    times, pos = trace(gait, 0.0, 3.2)
+    speed = np.abs(np.diff(pos, axis=0)) / np.diff(times)[:, None]
+    assert speed.max() <= config.servo_speed * (1 + 1e-6)
+    assert not np.any((speed[:, 0] > 1e-9) & (speed[:, 1] > 1e-9))
+    # in quarter 0 arm 1 moves, in quarter 1 arm 2 moves
+    assert speed[10:300, 0].max() > 0 and speed[10:300, 1].max() == 0
+    assert speed[410:700, 1].max() > 0 and speed[410:700, 0].max() == 0
+
+
+def test_stroke_takes_twice_alpha_over_speed() -> None:
+    config = GaitConfig(alpha_max=A, period=1.6, servo_speed=10.0)
+    gait = SquareGait(config)
+    gait.start(2.0)
+    arrival = 2.0 + 2 * A / 10.0
+    assert gait.command(arrival - 0.01).positions[0] > -A + 0.05
+    assert gait.command(arrival + 1e-6).positions[0] == pytest.approx(-A)
+
+
+def test_gait_is_periodic_and_matches_closed_form() -> None:
+    config = GaitConfig.from_degrees(60.0, period=1.2, phase=0.3)
+    gait = SquareGait(config)
+    gait.start(5.0)
+    for t in np.arange(5.0, 9.8, 0.0137):
+        tau = (t - 5.0) / 1.2 + 0.3
+        assert gait.command(float(t)).positions == pytest.approx(open_loop_angles(config, tau))
+    assert open_loop_angles(config, 0.3) == pytest.approx(open_loop_angles(config, 1.3))
+
+
+def test_phase_offset_shifts_the_gait() -> None:
+    base = SquareGait(GaitConfig(alpha_max=A))
+    shifted = SquareGait(GaitConfig(alpha_max=A, phase=0.25))
+    base.start(0.0)
+    shifted.start(0.0)
+    assert shifted.command(0.1).positions == pytest.approx(base.command(0.5).positions)
+
+
+def test_before_start_the_arms_hold_the_start_pose() -> None:
+    gait = SquareGait(GaitConfig(alpha_max=A, phase=0.5))
+    cmd = gait.command(123.0)
+    assert not cmd.started and cmd.targets == cmd.positions == pytest.approx((-A, -A))
+    gait.start(200.0)
+    assert not gait.command(199.0).started
+
+
+def test_halt_holds_then_resumes_from_held_position_at_next_period() -> None:
+    config = GaitConfig(alpha_max=A, period=1.6, servo_speed=DEFAULT_SERVO_SPEED)
+    gait = SquareGait(config)
+    gait.start(0.0)
+    t_halt = 0.4 + 0.05  # quarter 1: arm 2 moving from +A toward -A
+    assert gait.halt(t_halt)
+    held = gait.command(t_halt).positions
+    assert held[1] == pytest.approx(A - config.servo_speed * 0.05)
+    assert not gait.halt(t_halt + 0.1)  # already halted
+    for t in (0.6, 1.0, 1.5, 1.599):
+        cmd = gait.command(t)
+        assert cmd.halted and cmd.positions == pytest.approx(held) and cmd.targets == pytest.approx(held)
+    # next period: quarter 0 moves arm 1 toward -A (it already is there), quarter 1 moves arm 2 from held
+    assert not gait.command(1.6 + 1e-9).halted
+    assert gait.command(1.6 + 0.3).positions == pytest.approx(held)
+    mid = gait.command(1.6 + 0.4 + 0.05).positions
+    assert mid[1] == pytest.approx(held[1] - config.servo_speed * 0.05)
+    assert gait.command(1.6 + 0.79).positions == pytest.approx((-A, -A))
+
+
+def test_halt_result_does_not_depend_on_sampling_rate() -> None:
+    coarse, fine = SquareGait(GaitConfig(alpha_max=A)), SquareGait(GaitConfig(alpha_max=A))
+    for gait in (coarse, fine):
+        gait.start(0.0)
+    fine_times = np.arange(0.0, 1.0, 0.001)
+    for t in fine_times:
+        fine.command(float(t))
+    coarse.command(0.5)
+    coarse.halt(1.0)
+    fine.halt(1.0)
+    for t in (1.2, 2.0, 2.5, 3.3):
+        assert coarse.command(t).positions == pytest.approx(fine.command(t).positions)
+
+
+def test_halt_before_start_is_refused_and_time_must_not_go_back() -> None:
+    gait = SquareGait(GaitConfig(alpha_max=A))
+    assert not gait.halt(1.0)
+    gait.start(1.0)
+    gait.command(2.0)
+    with pytest.raises(GaitError, match='backwards'):
+        gait.command(1.5)
+
+
+@pytest.mark.parametrize('kwargs, field', [
+    ({'alpha_max': math.radians(4.0)}, 'alpha_max'),
+    ({'alpha_max': math.radians(121.0)}, 'alpha_max'),
+    ({'alpha_max': float('nan')}, 'alpha_max'),
+    ({'period': 0.0}, 'period'),
+    ({'servo_speed': -1.0}, 'servo_speed'),
+    ({'phase': 1.0}, 'phase'),
+    ({'alpha_max': math.radians(120.0), 'servo_speed': 5.0}, 'stroke'),
+])
+def test_invalid_configs_are_refused_with_the_field_named(kwargs: dict[str, float], field: str) -> None:
+    with pytest.raises(GaitError, match=field):
+        GaitConfig(**kwargs)
+
+
+def test_full_amplitude_range_fits_default_speed() -> None:
+    for deg in (5.0, 45.0, 90.0, 120.0):
+        config = GaitConfig.from_degrees(deg)
+        gait = SquareGait(config)
+        gait.start(0.0)
+        assert gait.command(0.4 + 1e-6).positions[0] == pytest.approx(-config.alpha_max)

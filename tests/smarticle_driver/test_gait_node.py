@@ -1,0 +1,68 @@
+"""The `gait` node in its own process: synchronised start, the square gait on the wire, halt, bad params."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+
+from smarticle_driver import topics
+from smarticle_driver.gait import GaitConfig, SquareGait
+from smarticle_driver.gait_node import NODE_NAME, PARAMS
+from smarticle_driver.params import read_defaults_yaml
+from tests.conftest import executable, spin_until
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_shipped_yaml_equals_declared_defaults() -> None:
+    shipped = read_defaults_yaml(str(ROOT / 'smarticle_driver' / 'config' / 'gait.yaml'), NODE_NAME)
+    assert shipped == {spec.name: spec.default for spec in PARAMS}
+
+
+@pytest.mark.integration
+def test_gait_node_follows_start_and_halt(nodes, ros_node) -> None:  # type: ignore[no-untyped-def]
+    from sensor_msgs.msg import JointState
+    from std_msgs.msg import Header
+
+    nodes.start('gait', '--ros-args', '-p', 'robot_id:=2', '-p', 'alpha_max_deg:=60.0',
+                '-p', 'period:=0.8', '-p', 'heartbeat:=0.05')
+    node = ros_node('gait_probe')
+    got: list[tuple[float, tuple[float, ...]]] = []
+    node.create_subscription(JointState, topics.topic('joint_commands', 2),
+                             lambda m: got.append((time.time(), tuple(m.position))),
+                             topics.qos_profile(topics.Qos.COMMAND))
+    start_pub = node.create_publisher(Header, topics.topic('start'), topics.qos_profile(topics.Qos.LATCHED))
+    halt_pub = node.create_publisher(Header, topics.topic('halt', 2), topics.qos_profile(topics.Qos.COMMAND))
+    assert spin_until(node, lambda: len(got) >= 2, 15.0), 'no commands before the start'
+    a = math.radians(60.0)
+    assert got[-1][1] == pytest.approx((a, a))  # start pose held before the start
+
+    t0 = time.time() + 0.5
+    msg = Header()
+    msg.stamp.sec, msg.stamp.nanosec = int(t0), int((t0 % 1) * 1e9)
+    start_pub.publish(msg)
+    spin_until(node, lambda: time.time() > t0 + 1.7, 5.0)
+    reference = SquareGait(GaitConfig.from_degrees(60.0, period=0.8))
+    reference.start(t0)
+    started = [(t, pos) for t, pos in got if t > t0 + 0.02]
+    # a command received at time t carries the targets of the gait at t minus the DDS latency
+    mismatched = [(t - t0, pos) for t, pos in started
+                  if pos != pytest.approx(reference.command(t - 0.004).targets, abs=1e-9)
+                  and pos != pytest.approx(reference.command(t - 0.03).targets, abs=1e-9)]
+    assert len(started) > 20 and not mismatched
+    seen = {tuple(round(v / a) for v in pos) for _, pos in started}
+    assert seen == {(-1, 1), (-1, -1), (1, -1), (1, 1)}
+
+    halt_pub.publish(Header())
+    spin_until(node, lambda: False, 0.3)
+    held = got[-1][1]
+    count = len(got)
+    spin_until(node, lambda: False, 0.25)
+    assert len(got) > count and all(pos == held for _, pos in got[count:]), 'arms must hold after a halt'
+    # within one period the next gait period begins and the targets move on from the held pose
+    spin_until(node, lambda: got[-1][1] != held, 1.0)
+    assert got[-1][1] != held, 'the gait must resume at the next period'
