@@ -66,3 +66,10 @@ def test_gait_node_follows_start_and_halt(nodes, ros_node) -> None:  # type: ign
     # within one period the next gait period begins and the targets move on from the held pose
     spin_until(node, lambda: got[-1][1] != held, 1.0)
     assert got[-1][1] != held, 'the gait must resume at the next period'
+
+
+def test_invalid_parameter_stops_startup_with_a_clear_error() -> None:
+    proc = subprocess.run([executable('gait'), '--ros-args', '-p', 'alpha_max_deg:=150.0'],
+                          capture_output=True, text=True, timeout=30)
+    assert proc.returncode != 0
+    assert 'alpha_max_deg' in proc.stdout + proc.stderr and 'maximum' in proc.stdout + proc.stderr

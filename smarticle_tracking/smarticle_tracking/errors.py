@@ -1,0 +1,23 @@
+"""Exceptions of the smarticle_tracking cores (all are ValueErrors: the input was wrong)."""
+
+from __future__ import annotations
+
+
+class TrackingError(ValueError):
+    """Base class of every error raised by the smarticle_tracking cores."""
+
+
+class GliderError(TrackingError):
+    """Base class of the glider-analysis errors."""
+
+
+class GliderInputError(GliderError):
+    """Malformed data given to the glider analysis (shapes, times, NaN where not allowed)."""
+
+
+class GliderConfigError(GliderError):
+    """An invalid glider-analysis parameter."""
+
+
+class MsdFitError(GliderError):
+    """Too few usable MSD points to fit the exponent beta."""
