@@ -58,7 +58,8 @@ def test_every_executable_is_where_ros2_run_looks(install_space: Path) -> None:
 @pytest.mark.slow
 def test_ament_index_finds_every_package_and_its_config(install_space: Path) -> None:
     env = sourced_env(install_space)
-    code = ('from ament_index_python.packages import get_package_share_directory as g, get_packages_with_prefixes;'
+    code = ('from ament_index_python.packages import get_package_share_directory as g, '
+            'get_packages_with_prefixes;'
             'import sys, pathlib; names=sys.argv[1:];'
             'print(all(n in get_packages_with_prefixes() for n in names));'
             'print((pathlib.Path(g("smarticle_driver"))/"config"/"gait.yaml").is_file())')

@@ -11,10 +11,10 @@ import math
 import matplotlib
 
 matplotlib.use('Agg')
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
-from smarticle_driver.gait import GaitConfig, SquareGait  # noqa: E402
+from smarticle_driver.gait import GaitConfig, SquareGait
 
 BODY_W, ARM_L = 5.4, 5.0
 
@@ -61,7 +61,7 @@ def main() -> None:
     ax.plot(path[:, 0], path[:, 1], color='gray', lw=1)
     a = 90
     corners = [(a, a), (-a, a), (-a, -a), (a, -a)]
-    for i, (c, d) in enumerate(zip(corners, corners[1:] + corners[:1])):
+    for i, (c, d) in enumerate(zip(corners, corners[1:] + corners[:1], strict=False)):
         ax.annotate('', xy=d, xytext=c, arrowprops={'arrowstyle': '->', 'color': 'red', 'lw': 2})
         ax.text(c[0] * 1.12, c[1] * 1.12, f'c{i}', ha='center', va='center', fontsize=12)
         mid = ((c[0] + d[0]) / 2, (c[1] + d[1]) / 2)

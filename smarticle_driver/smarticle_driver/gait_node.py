@@ -15,7 +15,8 @@ from rclpy.node import Node
 from rclpy.time import Time
 
 from smarticle_driver import topics
-from smarticle_driver.gait import DEFAULT_PERIOD, DEFAULT_SERVO_SPEED, GaitCommand, GaitConfig, GaitError, SquareGait
+from smarticle_driver.gait import (DEFAULT_PERIOD, DEFAULT_SERVO_SPEED, GaitCommand, GaitConfig, GaitError,
+                                   SquareGait)
 from smarticle_driver.params import ParameterError, ParamSpec, declare_and_read
 
 NODE_NAME = 'gait'
@@ -29,6 +30,8 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec('tick_rate', 100.0, 'how often the gait is evaluated, Hz', 1.0, 1000.0),
     ParamSpec('heartbeat', 0.2, 'republish the unchanged command after this many seconds', 0.005, 10.0),
     ParamSpec('autostart', False, 'start at the first tick without waiting for /smarticles/start'),
+    ParamSpec('lockstep', False, 'publish one command stamped with every /clock message (for the '
+              "simulation's lock-step mode) instead of on change plus heartbeat"),
 )
 
 
@@ -53,6 +56,7 @@ class GaitNode(Node):
         self.autostart: bool = values['autostart']
         self._last_targets: tuple[float, float] | None = None
         self._last_sent_ns = 0
+        self._latest_ns = 0
         self._joint_state_type = topics.message_class('sensor_msgs/msg/JointState')
         spec = topics.spec_of('joint_commands')
         self.publisher = self.create_publisher(
@@ -63,15 +67,29 @@ class GaitNode(Node):
         halt = topics.spec_of('halt')
         self.create_subscription(header_type, halt.resolve(self.robot_id), self.on_halt,
                                  topics.qos_profile(halt.qos))
-        self.timer = self.create_timer(1.0 / values['tick_rate'], self.on_tick)
+        self.lockstep: bool = values['lockstep']
+        if self.lockstep:
+            clock = topics.spec_of('clock')
+            self.create_subscription(topics.message_class(clock.type), clock.resolve(), self.on_clock,
+                                     topics.qos_profile(clock.qos))
+        else:
+            self.timer = self.create_timer(1.0 / values['tick_rate'], self.on_tick)
         waiting = 'starting at once' if self.autostart else f'waiting for {start.resolve()}'
         self.get_logger().info(
-            f'robot {self.robot_id}: alpha_max {values["alpha_max_deg"]:g} deg, period {values["period"]:g} s, '
-            f'phase {values["phase"]:g}; {waiting}')
+            f'robot {self.robot_id}: alpha_max {values["alpha_max_deg"]:g} deg, '
+            f'period {values["period"]:g} s, phase {values["phase"]:g}; {waiting}')
+
+    def now(self) -> Time:
+        """Return the node clock's time, never earlier than a time already handed to the gait."""
+        now = self.get_clock().now()
+        if now.nanoseconds < self._latest_ns:
+            return Time(nanoseconds=self._latest_ns, clock_type=now.clock_type)
+        self._latest_ns = now.nanoseconds
+        return now
 
     def now_seconds(self) -> float:
-        """Return the node clock's time in seconds."""
-        return self.get_clock().now().nanoseconds * 1e-9
+        """Return ``now()`` in seconds."""
+        return self.now().nanoseconds * 1e-9
 
     def on_start(self, msg: Any) -> None:
         """Start (or restart) the gait at the stamped time."""
@@ -85,9 +103,20 @@ class GaitNode(Node):
         if self.gait.halt(self.now_seconds()):
             self.on_tick()
 
+    def on_clock(self, msg: Any) -> None:
+        """Lock-step mode: publish the command for exactly the time of this clock message."""
+        now = Time.from_msg(msg.clock)
+        if now.nanoseconds < self._latest_ns:
+            self.get_logger().warning('clock went backwards: ignored')
+            return
+        self._latest_ns = now.nanoseconds
+        if self.autostart and self.gait.start_time is None:
+            self.gait.start(now.nanoseconds * 1e-9)
+        self.publisher.publish(self.to_message(self.gait.command(now.nanoseconds * 1e-9), now))
+
     def on_tick(self) -> None:
         """Evaluate the gait and publish when the targets change or the heartbeat is due."""
-        now = self.get_clock().now()
+        now = self.now()
         if now.nanoseconds == 0:
             return  # sim time not yet received
         if self.autostart and self.gait.start_time is None:

@@ -46,12 +46,12 @@ class PowerLawFit(NamedTuple):
 
 
 def _as_paths(paths: ArrayLike | Sequence[ArrayLike]) -> list[FloatArray]:
-    """Normalise one (L, d) path or a sequence of them to a list of float arrays."""
-    first = np.asarray(paths, dtype=object) if isinstance(paths, (list, tuple)) else None
-    if first is not None and len(paths) > 0 and np.ndim(paths[0]) == 2:  # type: ignore[index, arg-type]
-        candidates = [np.asarray(p, dtype=float) for p in paths]  # type: ignore[union-attr]
+    """Normalise one (L, d) path, a (n, L, d) stack or a sequence of paths to a list of arrays."""
+    if isinstance(paths, (list, tuple)) and paths and all(np.ndim(p) == 2 for p in paths):
+        candidates = [np.asarray(p, dtype=float) for p in paths]
     else:
-        candidates = [np.asarray(paths, dtype=float)]
+        whole = np.asarray(paths, dtype=float)
+        candidates = list(whole) if whole.ndim == 3 else [whole]
     if not candidates:
         raise GliderInputError('msd needs at least one path')
     dims = {p.shape[1] if p.ndim == 2 else -1 for p in candidates}

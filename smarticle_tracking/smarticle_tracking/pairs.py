@@ -133,16 +133,6 @@ def pair_centres(poses: ArrayLike, pairs: ArrayLike | None = None) -> FloatArray
     return 0.5 * (arr[:, idx[:, 0], :2] + arr[:, idx[:, 1], :2])
 
 
-def angle_sums(angles: ArrayLike, axis: int = 0) -> tuple[FloatArray, FloatArray, IntArray]:
-    """Return (sum cos, sum sin, count) of the finite angles along ``axis``; NaNs are skipped."""
-    arr = np.asarray(angles, dtype=float)
-    finite = np.isfinite(arr)
-    safe = np.where(finite, arr, 0.0)
-    return (np.where(finite, np.cos(safe), 0.0).sum(axis=axis),
-            np.where(finite, np.sin(safe), 0.0).sum(axis=axis),
-            finite.sum(axis=axis))
-
-
 def circular_mean(cos_sum: ArrayLike, sin_sum: ArrayLike, count: ArrayLike) -> FloatArray:
     """Circular mean in [0, 2 pi) from angle sums; NaN where count is 0 or the angles cancel out."""
     c = np.asarray(cos_sum, dtype=float)

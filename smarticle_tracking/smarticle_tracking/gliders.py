@@ -1,0 +1,412 @@
+"""Glider analysis: bound pairs per gait period, C1/C2 class, lifetime, transport, MSD exponent.
+
+Definitions (also in docs/gliders.md):
+
+* **Periods.** Period ``q`` covers times ``[t0 + q T, t0 + (q + 1) T)``; ``t0`` is the gait start
+  (default: the first frame). Frames before ``t0`` belong to no period and are ignored.
+* **Bound.** Pair (i, j) is bound in period q if, in at least one frame of q, the two robots touch
+  (optional ``contacts`` input) or their centre distance r is below ``r_bind``. A frame where either
+  robot is unseen (NaN pose) gives no r, so it can only bind through ``contacts``. A period with no
+  frames at all is unbound.
+* **Glider.** A run of at least ``min_periods`` (K) consecutive bound periods. Its lifetime is the run
+  length (periods, and seconds = periods x T); ``ongoing`` marks a run still bound in the last
+  period of the data (its lifetime is then a lower bound).
+* **Class.** From the circular mean of phi over every seen frame of the run: C1 if within
+  ``class_tolerance`` of pi (anti-aligned), C2 if within it of 0 (aligned), else unclassified.
+* **Centre-of-mass path.** One sample per period of the run: the pair's centre of mass (mean of the
+  two body centres) at the first frame of the period in which both robots are seen (a stroboscopic
+  sample at nearly the same gait phase, so the within-cycle wiggle drops out); NaN if never seen.
+* **Distance travelled** = ``|R_last - R_first|`` of that path (net transport, m; / W for W units).
+  **Path length** = sum of ``|R(q + 1) - R(q)|`` over consecutive seen periods.
+* **V_com** = mean of ``|R(q + 1) - R(q)| / T`` over consecutive seen periods (mean per-period
+  centre-of-mass speed, m/s). ``net_speed`` = distance travelled / time between the first and last
+  seen samples.
+* **MSD and beta**: :mod:`smarticle_tracking.msd` on the per-period path, lags in periods; beta fitted
+  over lags ``msd_min_lag..msd_max_lag`` (default up to a quarter of the run). Per glider the plain
+  time-averaged MSD is used unless ``msd_subtract_mean``; :func:`ensemble_msd` applies the paper's
+  ``<x^2> - <x>^2`` over an ensemble of gliders.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .errors import GliderConfigError, GliderInputError, MsdFitError
+from .msd import MsdResult, default_max_lag, fit_msd_exponent, msd
+from .pairs import (BODY_LENGTH, PairCoordinates, angular_distance, as_pose_array, circular_mean,
+                    pair_centres, pair_coordinates, pair_indices)
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.intp]
+BoolArray = NDArray[np.bool_]
+
+DEFAULT_PERIOD = 1.6
+#: Default bind distance: 2 BL (10.8 cm) between body centres, about where an arm (5 cm, hinged at the
+#: body end 2.7 cm from the centre) of one robot can still reach the other robot.
+DEFAULT_R_BIND = 2.0 * BODY_LENGTH
+#: Per-frame sums accumulated per period, in this order along the last axis.
+SUM_FIELDS: tuple[str, ...] = ('count', 'r', 'phi_cos', 'phi_sin', 'theta_cos', 'theta_sin')
+_PERIOD_EPS = 1e-9
+
+
+class GliderClass(Enum):
+    """Binding symmetry of a glider (paper Fig. 2)."""
+
+    C1 = 'C1'                       # nearly anti-aligned, phi near pi
+    C2 = 'C2'                       # nearly aligned, phi near 0 / 2 pi
+    UNCLASSIFIED = 'unclassified'   # phi mean farther than the tolerance from both
+
+
+@dataclass(frozen=True)
+class GliderConfig:
+    """Glider-analysis settings, SI units (m, s, rad); ``width`` is the W of the paper's distances."""
+
+    period: float = DEFAULT_PERIOD
+    r_bind: float = DEFAULT_R_BIND
+    min_periods: int = 30
+    class_tolerance: float = math.radians(45.0)
+    body_length: float = BODY_LENGTH
+    width: float = BODY_LENGTH
+    msd_min_lag: int = 1
+    msd_max_lag: int | None = None
+    msd_subtract_mean: bool = False
+
+    def __post_init__(self) -> None:
+        for name in ('period', 'r_bind', 'body_length', 'width'):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0.0):
+                raise GliderConfigError(f'{name} must be a positive finite number, got {value!r}')
+        if not _is_count(self.min_periods) or self.min_periods < 1:
+            raise GliderConfigError(f'min_periods (K) must be a whole number >= 1, got {self.min_periods!r}')
+        tol = self.class_tolerance
+        if not (isinstance(tol, (int, float)) and 0.0 < tol <= math.pi / 2):
+            raise GliderConfigError(f'class_tolerance must be in (0, pi/2] rad so C1 and C2 cannot '
+                                    f'overlap, got {tol!r}')
+        if not _is_count(self.msd_min_lag) or self.msd_min_lag < 1:
+            raise GliderConfigError(f'msd_min_lag must be a whole number >= 1, got {self.msd_min_lag!r}')
+        if self.msd_max_lag is not None and (not _is_count(self.msd_max_lag)
+                                             or self.msd_max_lag < self.msd_min_lag + 1):
+            raise GliderConfigError(f'msd_max_lag must be None or a whole number > msd_min_lag '
+                                    f'({self.msd_min_lag}), got {self.msd_max_lag!r}')
+
+
+def _is_count(value: object) -> bool:
+    """True for a Python or NumPy integer that is not a bool."""
+    return isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+
+
+def classify_configuration(phi: float, tolerance: float = math.radians(45.0)) -> GliderClass:
+    """Classify a (mean) relative heading phi (rad) as C1 (near pi), C2 (near 0) or unclassified."""
+    if not math.isfinite(phi):
+        return GliderClass.UNCLASSIFIED
+    if float(angular_distance(phi, math.pi)) <= tolerance:
+        return GliderClass.C1
+    if float(angular_distance(phi, 0.0)) <= tolerance:
+        return GliderClass.C2
+    return GliderClass.UNCLASSIFIED
+
+
+def period_index(times: ArrayLike, t0: float, period: float) -> IntArray:
+    """Gait period index ``floor((t - t0) / period)`` of each time (a time on a boundary starts it)."""
+    return np.floor((np.asarray(times, dtype=float) - t0) / period + _PERIOD_EPS).astype(np.intp)
+
+
+def frame_hits(r: ArrayLike, r_bind: float, contacts: ArrayLike | None = None) -> BoolArray:
+    """Per frame and pair: touching (``contacts``) or r < r_bind; an unseen (NaN) r never binds."""
+    r_arr = np.asarray(r, dtype=float)
+    with np.errstate(invalid='ignore'):
+        hits = np.isfinite(r_arr) & (r_arr < r_bind)
+    if contacts is not None:
+        hits = hits | np.asarray(contacts, dtype=bool)
+    return hits
+
+
+def frame_sums(coords: PairCoordinates) -> FloatArray:
+    """Per-frame contributions (T, P, len(SUM_FIELDS)) to the period sums; unseen frames add zeros."""
+    seen = np.isfinite(coords.r) & np.isfinite(coords.theta) & np.isfinite(coords.phi)
+    r = np.where(seen, coords.r, 0.0)
+    phi = np.where(seen, coords.phi, 0.0)
+    theta = np.where(seen, coords.theta, 0.0)
+    return np.stack([seen.astype(float), r,
+                     np.where(seen, np.cos(phi), 0.0), np.where(seen, np.sin(phi), 0.0),
+                     np.where(seen, np.cos(theta), 0.0), np.where(seen, np.sin(theta), 0.0)],
+                    axis=-1)
+
+
+class StretchMeans(NamedTuple):
+    """Means over the seen frames of a stretch of periods (NaN when none was seen)."""
+
+    r: FloatArray | float
+    theta: FloatArray | float
+    phi: FloatArray | float
+    frames: FloatArray | float
+
+
+def stretch_means(sums: ArrayLike) -> StretchMeans:
+    """Mean r and circular means of theta and phi from summed ``frame_sums`` (..., 6)."""
+    s = np.asarray(sums, dtype=float)
+    count = s[..., 0]
+    with np.errstate(invalid='ignore', divide='ignore'):
+        r_mean = np.where(count > 0, s[..., 1] / np.maximum(count, 1.0), np.nan)
+    return StretchMeans(r_mean, circular_mean(s[..., 4], s[..., 5], count),
+                        circular_mean(s[..., 2], s[..., 3], count), count)
+
+
+class PeriodTable(NamedTuple):
+    """Per-period view of a run: Q periods x P pairs."""
+
+    start_times: FloatArray   # (Q,) start time of each period (s)
+    bound: BoolArray          # (Q, P) bound in that period
+    sums: FloatArray          # (Q, P, 6) summed frame_sums over the period's frames
+    strobe: FloatArray        # (Q, P, 2) centre of mass at the first frame both robots are seen
+
+
+class Runs(NamedTuple):
+    """Runs of consecutive bound periods: pair index, first period, one past the last period."""
+
+    pair: IntArray
+    start: IntArray
+    stop: IntArray
+
+
+def bound_runs(bound: ArrayLike) -> Runs:
+    """All maximal runs of True along axis 0 of a (Q, P) bound table, ordered by pair then start."""
+    table = np.asarray(bound, dtype=bool)
+    if table.ndim != 2:
+        raise GliderInputError(f'bound must be a (Q, P) table, got shape {table.shape}')
+    padded = np.zeros((table.shape[1], table.shape[0] + 2), dtype=np.int8)
+    padded[:, 1:-1] = table.T
+    edges = np.diff(padded, axis=1)
+    pair, start = np.nonzero(edges == 1)
+    _, stop = np.nonzero(edges == -1)
+    return Runs(pair.astype(np.intp), start.astype(np.intp), stop.astype(np.intp))
+
+
+@dataclass(frozen=True, eq=False)
+class Glider:
+    """One glider: a pair bound for at least K consecutive periods, with its transport statistics."""
+
+    i: int
+    j: int
+    pair_index: int
+    start_period: int
+    lifetime_periods: int
+    start_time: float              # s
+    lifetime: float                # s, lifetime_periods x T
+    ongoing: bool                  # still bound in the last period of the data
+    glider_class: GliderClass
+    r_mean: float                  # m
+    theta_mean: float              # rad, circular mean
+    phi_mean: float                # rad, circular mean
+    distance: float                # m, net centre-of-mass displacement
+    path_length: float             # m
+    v_com: float                   # m/s, mean per-period centre-of-mass speed
+    net_speed: float               # m/s, distance / time between first and last seen samples
+    beta: float                    # MSD exponent, NaN if the run is too short to fit
+    com_path: FloatArray = field(repr=False)   # (lifetime_periods, 2) per-period samples, NaN unseen
+    msd: MsdResult = field(repr=False)
+
+    @property
+    def end_time(self) -> float:
+        """End of the last bound period (s)."""
+        return self.start_time + self.lifetime
+
+
+@dataclass(frozen=True, eq=False)
+class GliderAnalysis:
+    """Everything the batch analysis computed for one run."""
+
+    config: GliderConfig
+    t0: float
+    times: FloatArray           # (T,) frame times used (at or after t0)
+    coords: PairCoordinates     # (T, P) r, theta, phi and the pair list
+    periods: PeriodTable
+    gliders: tuple[Glider, ...]
+
+
+class PathStats(NamedTuple):
+    """Transport along a per-period centre-of-mass path."""
+
+    distance: float
+    path_length: float
+    v_com: float
+    net_speed: float
+
+
+def path_stats(path: ArrayLike, period: float) -> PathStats:
+    """Distance, path length, V_com and net speed of a per-period path (L, 2); NaN rows skipped."""
+    arr = np.asarray(path, dtype=float)
+    seen = np.flatnonzero(np.all(np.isfinite(arr), axis=1))
+    if seen.size < 2:
+        return PathStats(0.0 if seen.size else math.nan, 0.0 if seen.size else math.nan,
+                         math.nan, math.nan)
+    distance = float(np.linalg.norm(arr[seen[-1]] - arr[seen[0]]))
+    steps = np.linalg.norm(arr[1:] - arr[:-1], axis=1)
+    steps = steps[np.isfinite(steps)]
+    v_com = float(steps.mean() / period) if steps.size else math.nan
+    net_speed = distance / (float(seen[-1] - seen[0]) * period)
+    return PathStats(distance, float(steps.sum()), v_com, net_speed)
+
+
+def _validate(times: ArrayLike, poses: ArrayLike, contacts: ArrayLike | None,
+              ) -> tuple[FloatArray, FloatArray, BoolArray | None]:
+    """Check shapes and times of the batch input."""
+    arr = as_pose_array(poses)
+    t = np.asarray(times, dtype=float)
+    if t.ndim != 1 or t.size != arr.shape[0]:
+        raise GliderInputError(f'times must be 1-D with one entry per frame ({arr.shape[0]}), '
+                               f'got shape {t.shape}')
+    if t.size == 0:
+        raise GliderInputError('no frames: times and poses are empty')
+    if not np.all(np.isfinite(t)):
+        raise GliderInputError('times must all be finite (drop frames without a timestamp)')
+    if np.any(np.diff(t) < 0.0):
+        first = int(np.flatnonzero(np.diff(t) < 0.0)[0]) + 1
+        raise GliderInputError(f'times must not decrease: frame {first} at {t[first]!r} s comes after '
+                               f'{t[first - 1]!r} s; sort the frames by time')
+    mask = None
+    if contacts is not None:
+        mask = np.asarray(contacts)
+        n_pairs = arr.shape[1] * (arr.shape[1] - 1) // 2
+        if mask.shape != (arr.shape[0], n_pairs):
+            raise GliderInputError(f'contacts must have shape (T, P) = ({arr.shape[0]}, {n_pairs}), '
+                                   f'one column per pair in pair_indices order, got {mask.shape}')
+        mask = mask.astype(bool)
+    return t, arr, mask
+
+
+def period_table(times: FloatArray, coords: PairCoordinates, centres: FloatArray, hits: BoolArray,
+                 t0: float, period: float) -> PeriodTable:
+    """Reduce per-frame data (sorted times >= t0) to the per-period table."""
+    q = period_index(times, t0, period)
+    n_periods = int(q[-1]) + 1
+    n_pairs = coords.pairs.shape[0]
+    starts = np.flatnonzero(np.r_[True, q[1:] != q[:-1]])
+    rows = q[starts]
+    bound = np.zeros((n_periods, n_pairs), dtype=bool)
+    bound[rows] = np.logical_or.reduceat(hits, starts, axis=0)
+    sums = np.zeros((n_periods, n_pairs, len(SUM_FIELDS)))
+    sums[rows] = np.add.reduceat(frame_sums(coords), starts, axis=0)
+    seen = np.all(np.isfinite(centres), axis=2)
+    frame_no = np.where(seen, np.arange(times.size)[:, None], times.size)
+    first = np.minimum.reduceat(frame_no, starts, axis=0)          # (U, P), T where never seen
+    padded = np.concatenate([centres, np.full((1, n_pairs, 2), np.nan)], axis=0)
+    strobe = np.full((n_periods, n_pairs, 2), np.nan)
+    strobe[rows] = padded[first, np.arange(n_pairs)[None, :]]
+    start_times = t0 + period * np.arange(n_periods)
+    return PeriodTable(start_times, bound, sums, strobe)
+
+
+def _fit_beta(result: MsdResult, config: GliderConfig) -> float:
+    """Beta of one glider's MSD, NaN when the run is too short for the lag window."""
+    try:
+        return fit_msd_exponent(result, config.msd_min_lag, config.msd_max_lag, config.period).beta
+    except MsdFitError:
+        return math.nan
+
+
+def measure_run(table: PeriodTable, pairs: IntArray, pair: int, start: int, stop: int,
+                config: GliderConfig) -> Glider:
+    """Measure one run of bound periods ``[start, stop)`` of pair index ``pair``."""
+    means = stretch_means(table.sums[start:stop, pair].sum(axis=0))
+    path = table.strobe[start:stop, pair].copy()
+    stats = path_stats(path, config.period)
+    max_lag = config.msd_max_lag or default_max_lag(len(path))
+    result = msd(path, max_lag=min(max_lag, max(len(path) - 1, 1)),
+                 subtract_mean=config.msd_subtract_mean)
+    phi_mean = float(means.phi)
+    return Glider(
+        i=int(pairs[pair, 0]), j=int(pairs[pair, 1]), pair_index=int(pair),
+        start_period=int(start), lifetime_periods=int(stop - start),
+        start_time=float(table.start_times[start]), lifetime=float((stop - start) * config.period),
+        ongoing=bool(stop == table.bound.shape[0]),
+        glider_class=classify_configuration(phi_mean, config.class_tolerance),
+        r_mean=float(means.r), theta_mean=float(means.theta), phi_mean=phi_mean,
+        distance=stats.distance, path_length=stats.path_length, v_com=stats.v_com,
+        net_speed=stats.net_speed, beta=_fit_beta(result, config), com_path=path, msd=result)
+
+
+def analyse_gliders(times: ArrayLike, poses: ArrayLike, config: GliderConfig | None = None,
+                    contacts: ArrayLike | None = None, t0: float | None = None) -> GliderAnalysis:
+    """Find and measure every glider in a run of poses (T, N, 3) at ``times`` (T,) seconds."""
+    cfg = GliderConfig() if config is None else config
+    t, arr, mask = _validate(times, poses, contacts)
+    start = float(t[0]) if t0 is None else float(t0)
+    if not math.isfinite(start):
+        raise GliderInputError(f't0 must be a finite time in seconds, got {t0!r}')
+    keep = slice(int(np.searchsorted(t, start - _PERIOD_EPS * cfg.period, side='left')), None)
+    t, arr = t[keep], arr[keep]
+    mask = None if mask is None else mask[keep]
+    if t.size == 0:
+        raise GliderInputError(f'no frames at or after t0 = {start!r} s')
+    pairs = pair_indices(arr.shape[1])
+    coords = pair_coordinates(arr, pairs)
+    table = period_table(t, coords, pair_centres(arr, pairs), frame_hits(coords.r, cfg.r_bind, mask),
+                         start, cfg.period)
+    runs = bound_runs(table.bound)
+    long_enough = (runs.stop - runs.start) >= cfg.min_periods
+    order = np.lexsort((runs.pair[long_enough], runs.start[long_enough]))
+    gliders = tuple(measure_run(table, pairs, int(p), int(s), int(e), cfg)
+                    for p, s, e in zip(runs.pair[long_enough][order], runs.start[long_enough][order],
+                                       runs.stop[long_enough][order]))
+    return GliderAnalysis(cfg, start, t, coords, table, gliders)
+
+
+def ensemble_msd(gliders: Iterable[Glider], max_lag: int | None = None,
+                 subtract_mean: bool = True) -> MsdResult:
+    """The paper's ``<x^2> - <x>^2`` over all time origins of all given gliders' per-period paths."""
+    paths = [g.com_path for g in gliders]
+    if not paths:
+        raise GliderInputError('ensemble_msd needs at least one glider')
+    return msd(paths, max_lag=max_lag, subtract_mean=subtract_mean)
+
+
+#: Columns of the glider table: key, header, format.
+TABLE_COLUMNS: tuple[tuple[str, str, str], ...] = (
+    ('i', 'i', '{:d}'), ('j', 'j', '{:d}'), ('class', 'class', '{}'),
+    ('start_s', 'start [s]', '{:.1f}'), ('start_period', 'start [T]', '{:d}'),
+    ('lifetime_periods', 'life [T]', '{:d}'), ('lifetime_s', 'life [s]', '{:.1f}'),
+    ('ongoing', 'ongoing', '{}'), ('phi_deg', 'phi [deg]', '{:.0f}'), ('r_bl', 'r [BL]', '{:.2f}'),
+    ('distance_w', 'dist [W]', '{:.2f}'), ('path_w', 'path [W]', '{:.2f}'),
+    ('beta', 'beta', '{:.2f}'), ('v_com_mm_s', 'V_com [mm/s]', '{:.2f}'),
+)
+
+
+def glider_table(gliders: Sequence[Glider], config: GliderConfig | None = None,
+                 ) -> list[dict[str, object]]:
+    """One row per glider: ids, class, start, lifetime, distance (W), beta, V_com (user units)."""
+    cfg = GliderConfig() if config is None else config
+    return [{
+        'i': g.i, 'j': g.j, 'class': g.glider_class.value,
+        'start_s': g.start_time, 'start_period': g.start_period,
+        'lifetime_periods': g.lifetime_periods, 'lifetime_s': g.lifetime, 'ongoing': g.ongoing,
+        'phi_deg': math.degrees(g.phi_mean), 'r_bl': g.r_mean / cfg.body_length,
+        'distance_w': g.distance / cfg.width, 'path_w': g.path_length / cfg.width,
+        'beta': g.beta, 'v_com_mm_s': 1e3 * g.v_com,
+    } for g in gliders]
+
+
+def _cell(fmt: str, value: object) -> str:
+    """Format one table cell; NaN shows as 'nan'."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return 'nan'
+    return fmt.format(value)
+
+
+def format_glider_table(rows: Sequence[Mapping[str, object]]) -> str:
+    """Format glider_table rows as an aligned plain-text table."""
+    if not rows:
+        return 'no gliders found'
+    header = [title for _, title, _ in TABLE_COLUMNS]
+    body = [[_cell(fmt, row[key]) for key, _, fmt in TABLE_COLUMNS] for row in rows]
+    widths = [max(len(line[c]) for line in [header, *body]) for c in range(len(header))]
+    lines = ['  '.join(cell.rjust(w) for cell, w in zip(line, widths)) for line in [header, *body]]
+    lines.insert(1, '  '.join('-' * w for w in widths))
+    return '\n'.join(lines)
