@@ -1,0 +1,433 @@
+"""The servo bridge without ROS: command checking, watchdog, servo slew model, FSR sampling, faults.
+
+``ServoBridgeCore`` is driven by two calls from its node (or a test): ``handle_command`` for every
+joint command and ``step`` at the FSR rate. It talks to the board only through ``boards.ServoBoard``
+over a ``serial_link.SerialLink`` and returns plain values and messages: it never raises on bad
+input or a failing port. Times are seconds of one monotonic clock.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field
+from enum import IntEnum
+from pathlib import Path
+from typing import Any
+
+from smarticle_driver import topics
+from smarticle_driver.boards import BOARD_KINDS, ServoBoard, make_board
+from smarticle_driver.calibration import (FsrModel, ServoCalibration, default_config_dir, load_fsr_calibration,
+                                          load_servo_calibration)
+from smarticle_driver.errors import BridgeConfigError, PortUnavailable, ReplyError
+from smarticle_driver.gait import DEFAULT_SERVO_SPEED
+from smarticle_driver.params import ParamSpec
+from smarticle_driver.serial_link import SerialLink
+from smarticle_driver.slew import SlewModel
+
+NODE_NAME = 'servo_bridge'
+SERVO_CALIBRATION_FILE = 'servo_calibration.yaml'
+FSR_CALIBRATION_FILE = 'fsr_calibration.yaml'
+#: Pulses closer than this (us) count as the same target (a quarter-microsecond step is 0.25 us).
+PULSE_EPSILON = 0.125
+
+_CH = (0, 23)
+
+PARAMS: tuple[ParamSpec, ...] = (
+    ParamSpec('robot_id', 0, 'robot id k: topics live under /smarticle_<k>', 0, topics.MAX_ROBOT_ID),
+    ParamSpec('board', 'maestro', f'servo board protocol, one of: {", ".join(BOARD_KINDS)}'),
+    ParamSpec('port', '/dev/ttyACM0', 'serial port of the board (Maestro command port; smarticle-fake-board '
+              'prints its own)'),
+    ParamSpec('baud', 115200, 'serial baud rate (ignored by USB command ports)', 300, 250000),
+    ParamSpec('arm1_channel', 0, 'board channel of the arm1 servo', *_CH),
+    ParamSpec('arm2_channel', 1, 'board channel of the arm2 servo', *_CH),
+    ParamSpec('fsr_arm1_front_channel', 2, 'analog input channel of the arm1_front FSR', *_CH),
+    ParamSpec('fsr_arm1_back_channel', 3, 'analog input channel of the arm1_back FSR', *_CH),
+    ParamSpec('fsr_arm2_front_channel', 4, 'analog input channel of the arm2_front FSR', *_CH),
+    ParamSpec('fsr_arm2_back_channel', 5, 'analog input channel of the arm2_back FSR', *_CH),
+    ParamSpec('fsr_rate_hz', 100.0, 'FSR sampling rate, also the joint_states rate (Hz)', 100.0, 1000.0),
+    ParamSpec('watchdog_timeout', 0.5, 'hold the arms where they are when no valid joint command arrives '
+              'for this many seconds', 0.02, 60.0),
+    ParamSpec('default_speed', DEFAULT_SERVO_SPEED, 'speed limit (rad/s) for commands without a valid '
+              'velocity', 0.01, 100.0),
+    ParamSpec('servo_calibration_file', '', f'servo calibration YAML; empty = {SERVO_CALIBRATION_FILE} in the '
+              "package's config folder"),
+    ParamSpec('fsr_calibration_file', '', f'FSR calibration YAML; empty = {FSR_CALIBRATION_FILE} in the '
+              "package's config folder"),
+    ParamSpec('reply_timeout', 0.02, 'seconds to wait for a board reply before counting it short', 0.001, 1.0),
+    ParamSpec('reconnect_initial', 0.1, 'first wait (s) before reopening a vanished port; doubles per failed '
+              'attempt', 0.01, 60.0),
+    ParamSpec('reconnect_max', 2.0, 'longest wait (s) between reopen attempts', 0.01, 600.0),
+    ParamSpec('diagnostics_period', 1.0, 'seconds between /diagnostics messages and board error polls',
+              0.1, 60.0),
+)
+
+
+@dataclass(frozen=True)
+class BridgeConfig:
+    """Checked settings of one servo bridge (see PARAMS for the meaning of each)."""
+
+    port: str
+    robot_id: int = 0
+    board: str = 'maestro'
+    baud: int = 115200
+    servo_channels: tuple[int, int] = (0, 1)
+    fsr_channels: tuple[int, int, int, int] = (2, 3, 4, 5)
+    fsr_rate_hz: float = 100.0
+    watchdog_timeout: float = 0.5
+    default_speed: float = DEFAULT_SERVO_SPEED
+    servo_calibration_file: str = ''
+    fsr_calibration_file: str = ''
+    reply_timeout: float = 0.02
+    reconnect_initial: float = 0.1
+    reconnect_max: float = 2.0
+    diagnostics_period: float = 1.0
+
+    def __post_init__(self) -> None:
+        channels = self.servo_channels + self.fsr_channels
+        if len(set(channels)) != len(channels):
+            raise BridgeConfigError(f'servo and FSR channels must all differ, got servos {self.servo_channels} '
+                                    f'and FSRs {self.fsr_channels}')
+        if self.board not in BOARD_KINDS:
+            raise BridgeConfigError(f'board must be one of {", ".join(BOARD_KINDS)}, got {self.board!r}')
+        if self.reconnect_initial > self.reconnect_max:
+            raise BridgeConfigError(f'reconnect_initial ({self.reconnect_initial} s) must not exceed '
+                                    f'reconnect_max ({self.reconnect_max} s)')
+        if not self.port:
+            raise BridgeConfigError('port must name a serial device, got an empty string')
+
+    @classmethod
+    def from_values(cls, values: dict[str, Any]) -> BridgeConfig:
+        """Build the config from checked parameter values (as returned by params.declare_and_read)."""
+        return cls(port=values['port'], robot_id=values['robot_id'], board=values['board'], baud=values['baud'],
+                   servo_channels=(values['arm1_channel'], values['arm2_channel']),
+                   fsr_channels=tuple(values[f'fsr_{face}_channel'] for face in topics.FSR_FACES),  # type: ignore[arg-type]
+                   fsr_rate_hz=values['fsr_rate_hz'], watchdog_timeout=values['watchdog_timeout'],
+                   default_speed=values['default_speed'],
+                   servo_calibration_file=values['servo_calibration_file'],
+                   fsr_calibration_file=values['fsr_calibration_file'], reply_timeout=values['reply_timeout'],
+                   reconnect_initial=values['reconnect_initial'], reconnect_max=values['reconnect_max'],
+                   diagnostics_period=values['diagnostics_period'])
+
+    def servo_calibration_path(self) -> Path:
+        """Return the servo calibration file to load (the package default when none is set)."""
+        return Path(self.servo_calibration_file or default_config_dir() / SERVO_CALIBRATION_FILE)
+
+    def fsr_calibration_path(self) -> Path:
+        """Return the FSR calibration file to load (the package default when none is set)."""
+        return Path(self.fsr_calibration_file or default_config_dir() / FSR_CALIBRATION_FILE)
+
+
+@dataclass
+class Counters:
+    """Everything the bridge counts; shown in /diagnostics."""
+
+    commands: int = 0
+    rejected_commands: int = 0
+    nonfinite_targets: int = 0
+    clamped_targets: int = 0
+    bad_speeds: int = 0
+    unknown_joints: int = 0
+    short_reply: int = 0
+    garbage: int = 0
+    malformed: int = 0
+    bad_reply: int = 0
+    board_errors: int = 0
+    watchdog_trips: int = 0
+    fsr_samples: int = 0
+
+    def add(self, name: str, count: int = 1) -> None:
+        """Add ``count`` to counter ``name``."""
+        setattr(self, name, getattr(self, name) + count)
+
+    def as_dict(self) -> dict[str, int]:
+        """Return the counters by name."""
+        return asdict(self)
+
+
+@dataclass
+class CheckedCommand:
+    """A joint command after checking: usable targets and speeds by joint, and what was wrong."""
+
+    targets: dict[str, float] = field(default_factory=dict)
+    speeds: dict[str, float] = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)
+    counts: dict[str, int] = field(default_factory=dict)
+
+    def flag(self, counter: str, message: str) -> None:
+        """Record a problem: bump ``counter`` and keep ``message``."""
+        self.counts[counter] = self.counts.get(counter, 0) + 1
+        self.warnings.append(message)
+
+
+def check_command(names: Sequence[str], positions: Sequence[float], velocities: Sequence[float],
+                  limits: dict[str, tuple[float, float]], fallback_speed: float) -> CheckedCommand:
+    """Check one JointState-like command against the joints' angle ``limits`` (rad)."""
+    out = CheckedCommand()
+    if len(positions) != len(names):
+        out.flag('rejected_commands', f'joint command ignored: {len(names)} names but {len(positions)} positions')
+        return out
+    if len(velocities) not in (0, len(names)):
+        out.flag('rejected_commands', f'joint command ignored: {len(names)} names but {len(velocities)} '
+                                      'velocities (give one per name, or none)')
+        return out
+    if len(set(names)) != len(names):
+        out.flag('rejected_commands', f'joint command ignored: repeated joint names {list(names)}')
+        return out
+    for i, name in enumerate(names):
+        if name not in limits:
+            out.flag('unknown_joints', f'joint command: unknown joint {name!r} ignored (known: '
+                                       f'{", ".join(limits)})')
+            continue
+        target = float(positions[i])
+        if not math.isfinite(target):
+            out.flag('nonfinite_targets', f'joint command: {name} target {target} is not finite; '
+                                          'keeping the previous target')
+            continue
+        lo, hi = limits[name]
+        if not lo <= target <= hi:
+            clamped = min(max(target, lo), hi)
+            out.flag('clamped_targets', f'joint command: {name} target {math.degrees(target):.1f} deg is outside '
+                                        f'{math.degrees(lo):.1f}..{math.degrees(hi):.1f} deg; clamped to '
+                                        f'{math.degrees(clamped):.1f}')
+            target = clamped
+        speed = float(velocities[i]) if velocities else fallback_speed
+        if not (math.isfinite(speed) and speed > 0.0):
+            out.flag('bad_speeds', f'joint command: {name} speed limit {speed} is not a positive number; '
+                                   f'using {fallback_speed:.3g} rad/s')
+            speed = fallback_speed
+        out.targets[name] = target
+        out.speeds[name] = speed
+    return out
+
+
+class Level(IntEnum):
+    """Diagnostic levels (the values of diagnostic_msgs/DiagnosticStatus)."""
+
+    OK = 0
+    WARN = 1
+    ERROR = 2
+
+
+@dataclass(frozen=True)
+class BridgeStatus:
+    """A diagnostic summary: level, one-line message, key/value details."""
+
+    level: Level
+    message: str
+    values: dict[str, str]
+
+
+@dataclass
+class StepResult:
+    """What one bridge step produced; ``None`` fields mean nothing to publish."""
+
+    joint_positions: tuple[float, ...] | None = None
+    joint_velocities: tuple[float, ...] | None = None
+    fsr_newtons: tuple[float, ...] | None = None
+    fsr_counts: tuple[int, ...] | None = None
+    warnings: list[str] = field(default_factory=list)
+    events: list[str] = field(default_factory=list)
+
+
+class _Joint:
+    """Per-joint state: calibration, channel, wanted target and speed, what the board was sent, model."""
+
+    def __init__(self, name: str, channel: int, calibration: ServoCalibration) -> None:
+        self.name = name
+        self.channel = channel
+        self.cal = calibration
+        self.target: float | None = None       # wanted angle (rad), clamped
+        self.speed = 0.0                       # wanted speed limit (rad/s)
+        self.sent_pulse: float | None = None   # what the board has (us), None = unknown
+        self.sent_rate: float | None = None
+        self.model = SlewModel()               # pulse (us) over time, at the board's speed limit
+
+
+class ServoBridgeCore:
+    """Joint commands in, Maestro bytes out; slew-model joint states and FSR newtons back."""
+
+    def __init__(self, config: BridgeConfig, servos: dict[str, ServoCalibration], fsrs: dict[str, FsrModel],
+                 link: SerialLink, board: ServoBoard) -> None:
+        self.config = config
+        self.link = link
+        self.board = board
+        self.fsrs = [fsrs[face] for face in topics.FSR_FACES]
+        self.joints = [_Joint(name, ch, servos[name]) for name, ch in zip(topics.JOINT_NAMES, config.servo_channels)]
+        self.limits = {j.name: j.cal.angle_limits() for j in self.joints}
+        self.counters = Counters()
+        self.last_command_time: float | None = None
+        self.holding = False
+        self.last_board_errors: list[str] = []
+        self.last_reply_error = ''
+        self._reported_reply_errors = 0
+
+    @classmethod
+    def from_config(cls, config: BridgeConfig) -> ServoBridgeCore:
+        """Load the calibration files and build the link and board (the port opens on the first step)."""
+        servos = load_servo_calibration(config.servo_calibration_path())
+        fsrs = load_fsr_calibration(config.fsr_calibration_path())
+        link = SerialLink(config.port, config.baud, config.reply_timeout, config.reconnect_initial,
+                          config.reconnect_max)
+        return cls(config, servos, fsrs, link, make_board(config.board, link))
+
+    def handle_command(self, names: Sequence[str], positions: Sequence[float], velocities: Sequence[float],
+                       now: float) -> list[str]:
+        """Take one joint command; send what changed at once; return warnings about the message."""
+        checked = check_command(names, positions, velocities, self.limits, self.config.default_speed)
+        self.counters.add('commands')
+        for counter, count in checked.counts.items():
+            self.counters.add(counter, count)
+        if checked.targets:
+            for joint in self.joints:
+                if joint.name in checked.targets:
+                    joint.target = checked.targets[joint.name]
+                    joint.speed = checked.speeds[joint.name]
+            self.last_command_time = now
+            self.holding = False
+            checked.warnings.extend(self._sync(now))
+        return checked.warnings
+
+    def step(self, now: float) -> StepResult:
+        """Reconnect if due, run the watchdog, send pending targets, sample the FSRs, model the joints."""
+        result = StepResult()
+        was_open = self.link.is_open
+        if self.link.poll():
+            result.events.append(f'port {self.link.port} opened')
+            result.warnings.extend(self._on_open(now))
+        self._watchdog(now, result)
+        result.warnings.extend(self._sync(now))
+        if self.link.is_open:
+            try:
+                counts = self.board.read_analog(self.config.fsr_channels)
+                result.fsr_counts = tuple(counts)
+                result.fsr_newtons = tuple(model.newtons(c) for model, c in zip(self.fsrs, counts))
+                self.counters.add('fsr_samples')
+            except ReplyError as err:
+                result.warnings.append(self._count_reply_error(err))
+            except PortUnavailable as err:
+                result.warnings.append(str(err))
+        if was_open and not self.link.is_open:
+            result.events.append(f'port {self.link.port} lost ({self.link.last_error}); reopening with back-off')
+        if self.link.is_open and all(j.model.known for j in self.joints):
+            result.joint_positions = tuple(j.cal.pulse_to_angle(j.model.position(now)) for j in self.joints)
+            result.joint_velocities = tuple(j.model.velocity(now) / j.cal.us_per_rad for j in self.joints)
+        return result
+
+    def poll_board_errors(self) -> list[str]:
+        """Read and clear the board's error flags; return warnings (empty when all is well)."""
+        if not self.link.is_open:
+            return []
+        try:
+            errors = self.board.get_errors()
+        except ReplyError as err:
+            return [self._count_reply_error(err)]
+        except PortUnavailable as err:
+            return [str(err)]
+        if errors:
+            self.counters.add('board_errors')
+            self.last_board_errors = errors
+            return [f'board reports errors: {", ".join(errors)}']
+        return []
+
+    def status(self, now: float) -> BridgeStatus:
+        """Summarise port, watchdog and counters for /diagnostics."""
+        link = self.link
+        reply_errors = sum(self.counters.as_dict()[k] for k in ('short_reply', 'garbage', 'malformed', 'bad_reply'))
+        new_reply_errors = reply_errors - self._reported_reply_errors
+        self._reported_reply_errors = reply_errors
+        age = None if self.last_command_time is None else now - self.last_command_time
+        if not link.is_open:
+            level = Level.ERROR
+            message = f'port {link.port} down ({link.last_error}); next attempt in {link.seconds_to_retry():.2f} s'
+        elif self.holding:
+            level = Level.WARN
+            message = f'watchdog: no joint command for {age:.2f} s, arms held'
+        elif new_reply_errors:
+            level = Level.WARN
+            message = f'{new_reply_errors} bad board replies since the last report ({self.last_reply_error})'
+        elif self.last_command_time is None:
+            level = Level.OK
+            message = 'port open, waiting for the first joint command'
+        else:
+            level = Level.OK
+            message = 'port open, arms following joint commands'
+        values = {
+            'port': link.port,
+            'port_state': link.state.value,
+            'port_opens': str(link.opens),
+            'port_disconnects': str(link.disconnects),
+            'failed_opens': str(link.failed_opens),
+            'last_port_error': link.last_error,
+            'watchdog': 'holding' if self.holding else 'ok',
+            'watchdog_timeout_s': f'{self.config.watchdog_timeout:g}',
+            'last_command_age_s': 'never' if age is None else f'{age:.3f}',
+            'last_board_errors': ', '.join(self.last_board_errors) or 'none',
+            'last_reply_error': self.last_reply_error or 'none',
+        }
+        values.update({k: str(v) for k, v in self.counters.as_dict().items()})
+        return BridgeStatus(level, message, values)
+
+    def close(self) -> None:
+        """Close the serial port."""
+        self.link.close()
+
+    def _watchdog(self, now: float, result: StepResult) -> None:
+        """Hold the arms where the model says they are when commands have stopped."""
+        if self.holding or self.last_command_time is None:
+            return
+        if now - self.last_command_time <= self.config.watchdog_timeout:
+            return
+        self.holding = True
+        self.counters.add('watchdog_trips')
+        for joint in self.joints:
+            if joint.model.known:
+                joint.target = joint.cal.pulse_to_angle(joint.model.position(now))
+        result.events.append(f'watchdog: no joint command for {now - self.last_command_time:.2f} s '
+                             f'(timeout {self.config.watchdog_timeout:g} s); holding the arms')
+
+    def _on_open(self, now: float) -> list[str]:
+        """After (re)opening: forget what the board was sent and seed the models from its pulses."""
+        warnings: list[str] = []
+        for joint in self.joints:
+            joint.sent_pulse = None
+            joint.sent_rate = None
+            joint.model.forget()
+            try:
+                pulse = self.board.read_pulse(joint.channel)
+            except ReplyError as err:
+                warnings.append(self._count_reply_error(err))
+                continue
+            except PortUnavailable as err:
+                warnings.append(str(err))
+                break
+            if pulse > 0.0:
+                joint.model.set_target(pulse, now)
+        return warnings
+
+    def _sync(self, now: float) -> list[str]:
+        """Send each joint's speed and target to the board when they differ from what it has."""
+        if not self.link.is_open:
+            return []
+        try:
+            for joint in self.joints:
+                if joint.target is None:
+                    continue
+                rate = joint.cal.rate_to_pulse_rate(joint.speed)
+                if joint.sent_rate is None or abs(rate - joint.sent_rate) > 1e-9:
+                    actual_rate = self.board.set_speed(joint.channel, rate)
+                    joint.model.set_rate(actual_rate, now)
+                    joint.sent_rate = rate
+                pulse = min(max(joint.cal.angle_to_pulse(joint.target), joint.cal.min_us), joint.cal.max_us)
+                if joint.sent_pulse is None or abs(pulse - joint.sent_pulse) > PULSE_EPSILON:
+                    actual = self.board.set_target(joint.channel, pulse)
+                    joint.model.set_target(actual, now)
+                    joint.sent_pulse = pulse
+        except PortUnavailable as err:
+            return [str(err)]
+        return []
+
+    def _count_reply_error(self, err: ReplyError) -> str:
+        self.counters.add(err.kind)
+        self.last_reply_error = str(err)
+        return f'bad reply from the board ({err.kind}): {err}'
