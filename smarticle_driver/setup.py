@@ -1,4 +1,7 @@
-"""ament_python package smarticle_driver: Square gait and Maestro servo bridge for smarticle robot boards, plus a board emulator."""
+"""ament_python package smarticle_driver.
+
+Square gait and Maestro servo bridge for smarticle robot boards, plus a board emulator.
+"""
 
 from glob import glob
 

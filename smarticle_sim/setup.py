@@ -1,4 +1,4 @@
-"""ament_python package smarticle_sim: PyBullet simulation of smarticles and a sim bridge node that publishes the hardware topics."""
+"""ament_python package smarticle_sim: PyBullet smarticle simulation and its sim bridge node."""
 
 from glob import glob
 
@@ -25,7 +25,7 @@ setup(
     python_requires='>=3.10',
     entry_points={
         'console_scripts': [
-
+            'smarticle-sim = smarticle_sim.cli:main',
         ],
     },
 )

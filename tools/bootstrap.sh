@@ -36,7 +36,8 @@ if [ "$want" != "$have" ]; then
   "$VENV/bin/python" -m pip install -q --upgrade pip
   "$VENV/bin/python" -m pip install -q -r "$ROOT/requirements-dev.txt"
   for p in "${PACKAGES[@]}"; do
-    "$VENV/bin/python" -m pip install -q --no-deps --no-build-isolation -e "$ROOT/$p"
+    "$VENV/bin/python" -m pip install -q --no-deps --no-build-isolation \
+      --config-settings editable_mode=compat -e "$ROOT/$p"
   done
   echo "$want" > "$VENV/.smarticle-stamp"
   echo "[bootstrap] environment ready"

@@ -1,4 +1,4 @@
-"""ament_python package smarticle_bags: Record, replay and analyse rosbag2-compatible mcap bags of smarticle runs."""
+"""ament_python package smarticle_bags: record, replay and analyse rosbag2-compatible mcap bags."""
 
 from glob import glob
 
@@ -25,7 +25,9 @@ setup(
     python_requires='>=3.10',
     entry_points={
         'console_scripts': [
-
+            'smarticle-bag = smarticle_bags.cli:main',
+            'recorder = smarticle_bags.recorder_node:main',
+            'player = smarticle_bags.player_node:main',
         ],
     },
 )

@@ -134,7 +134,8 @@ class DividerFsr:
         if newtons <= knee_force:
             conductance = newtons * self.micro_siemens_per_newton
         else:
-            conductance = self.knee_micro_siemens + (newtons - knee_force) * self.micro_siemens_per_newton_above_knee
+            above = (newtons - knee_force) * self.micro_siemens_per_newton_above_knee
+            conductance = self.knee_micro_siemens + above
         r_fsr = 1e6 / conductance
         v_out = self.vcc * self.r_measure_ohm / (self.r_measure_ohm + r_fsr)
         return v_out / self.adc_volts * self.adc_full_scale
@@ -149,10 +150,10 @@ class TableFsr:
     def __post_init__(self) -> None:
         if len(self.points) < 2:
             raise CalibrationError('FSR calibration points: expected at least two [counts, newtons] pairs')
-        for (c0, _), (c1, _) in zip(self.points, self.points[1:]):
+        for (c0, _), (c1, _) in zip(self.points, self.points[1:], strict=False):
             if not c1 > c0:
-                raise CalibrationError(f'FSR calibration points: expected strictly increasing counts, got {c0} '
-                                       f'then {c1}')
+                raise CalibrationError('FSR calibration points: expected strictly increasing counts, '
+                                       f'got {c0} then {c1}')
         for counts, force in self.points:
             if not (math.isfinite(counts) and math.isfinite(force) and force >= 0.0):
                 raise CalibrationError(f'FSR calibration points: expected finite counts and newtons >= 0, '
@@ -163,7 +164,7 @@ class TableFsr:
         pts = self.points
         if counts <= pts[0][0]:
             return pts[0][1]
-        for (c0, f0), (c1, f1) in zip(pts, pts[1:]):
+        for (c0, f0), (c1, f1) in zip(pts, pts[1:], strict=False):
             if counts <= c1:
                 return f0 + (f1 - f0) * (counts - c0) / (c1 - c0)
         return pts[-1][1]
@@ -250,19 +251,20 @@ def _fsr_model(path: str | Path, face: str, raw: dict[str, Any]) -> FsrModel:
     if model == 'table':
         extra = set(raw) - {'model', 'points'}
         if extra:
-            raise CalibrationError(f'{path}: field sensors.{face}.{sorted(extra)[0]} is unknown for model table; '
-                                   'expected points')
+            raise CalibrationError(f'{path}: field sensors.{face}.{sorted(extra)[0]} is unknown for model '
+                                   'table; expected points')
         pts = raw.get('points')
         if not isinstance(pts, list) or not all(isinstance(p, list) and len(p) == 2 for p in pts):
-            raise CalibrationError(f'{path}: field sensors.{face}.points: expected a list of [counts, newtons] '
-                                   f'pairs, got {pts!r}')
-        points = tuple((_number(path, f'sensors.{face}.points', c), _number(path, f'sensors.{face}.points', f))
-                       for c, f in pts)
+            raise CalibrationError(f'{path}: field sensors.{face}.points: expected a list of '
+                                   f'[counts, newtons] pairs, got {pts!r}')
+        where = f'sensors.{face}.points'
+        points = tuple((_number(path, where, c), _number(path, where, f)) for c, f in pts)
         try:
             return TableFsr(points)
         except CalibrationError as err:
             raise CalibrationError(f'{path}: sensors.{face}: {err}') from err
-    raise CalibrationError(f"{path}: field sensors.{face}.model: expected 'divider' or 'table', got {model!r}")
+    raise CalibrationError(f"{path}: field sensors.{face}.model: expected 'divider' or 'table', "
+                           f'got {model!r}')
 
 
 def load_fsr_calibration(path: str | Path) -> dict[str, FsrModel]:
@@ -281,9 +283,11 @@ def load_fsr_calibration(path: str | Path) -> dict[str, FsrModel]:
         raw = sensors.get(face)
         if raw is None:
             raise CalibrationError(f'{path}: field sensors.{face}: missing; every face of '
-                                   f'{", ".join(topics.FSR_FACES)} needs an entry (use {{}} for the defaults)')
+                                   f'{", ".join(topics.FSR_FACES)} needs an entry '
+                                   '(use {} for the defaults)')
         if not isinstance(raw, dict):
             raise CalibrationError(f'{path}: field sensors.{face}: expected a mapping, got {raw!r}')
-        merged = dict(raw) if raw.get('model', defaults.get('model', 'divider')) == 'table' else {**defaults, **raw}
+        is_table = raw.get('model', defaults.get('model', 'divider')) == 'table'
+        merged = dict(raw) if is_table else {**defaults, **raw}
         result[face] = _fsr_model(path, face, merged)
     return result

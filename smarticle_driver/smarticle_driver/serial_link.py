@@ -2,8 +2,8 @@
 
 ``SerialLink`` never blocks on a missing port: while it is down every call raises PortUnavailable at
 once, and ``poll()`` (called from the node's timer) tries to reopen it when the back-off has run out.
-Each transaction flushes stale input first, so a garbage byte or a truncated reply spoils one sample,
-never the byte alignment of the next one.
+Each transaction discards (and counts) stale input first, so a garbage byte or a truncated reply
+spoils one sample, never the byte alignment of the next one.
 """
 
 from __future__ import annotations
@@ -51,6 +51,7 @@ class SerialLink:
         self.opens = 0
         self.disconnects = 0
         self.failed_opens = 0
+        self.discarded_bytes = 0
         self._serial: serial.Serial | None = None
         self._backoff = backoff_initial
         self._next_attempt = clock()
@@ -97,11 +98,15 @@ class SerialLink:
         """Send ``data`` and return exactly ``reply_length`` bytes; ShortReply/GarbageReply otherwise."""
         port = self._require()
         try:
-            port.reset_input_buffer()
+            stale = port.in_waiting
+            if stale:
+                self.discarded_bytes += stale
+                port.reset_input_buffer()
             port.write(data)
             reply = port.read(reply_length)
             extra = port.in_waiting
             if extra:
+                self.discarded_bytes += extra
                 port.reset_input_buffer()
         except _PORT_ERRORS as err:
             self._drop(f'{self.port} failed during a transaction: {err}')
@@ -109,7 +114,8 @@ class SerialLink:
             raise ShortReply(f'expected {reply_length} reply bytes within {self.reply_timeout:g} s, got '
                              f'{len(reply)}: {reply.hex() or "nothing"}')
         if extra:
-            raise GarbageReply(f'{extra} unexpected byte(s) after a {reply_length}-byte reply: sample dropped')
+            raise GarbageReply(f'{extra} unexpected byte(s) after a {reply_length}-byte reply: '
+                               'sample dropped')
         return reply
 
     def close(self) -> None:

@@ -17,8 +17,8 @@ from typing import Any
 
 from smarticle_driver import topics
 from smarticle_driver.boards import BOARD_KINDS, ServoBoard, make_board
-from smarticle_driver.calibration import (FsrModel, ServoCalibration, default_config_dir, load_fsr_calibration,
-                                          load_servo_calibration)
+from smarticle_driver.calibration import (FsrModel, ServoCalibration, default_config_dir,
+                                          load_fsr_calibration, load_servo_calibration)
 from smarticle_driver.errors import BridgeConfigError, PortUnavailable, ReplyError
 from smarticle_driver.gait import DEFAULT_SERVO_SPEED
 from smarticle_driver.params import ParamSpec
@@ -50,11 +50,12 @@ PARAMS: tuple[ParamSpec, ...] = (
               'for this many seconds', 0.02, 60.0),
     ParamSpec('default_speed', DEFAULT_SERVO_SPEED, 'speed limit (rad/s) for commands without a valid '
               'velocity', 0.01, 100.0),
-    ParamSpec('servo_calibration_file', '', f'servo calibration YAML; empty = {SERVO_CALIBRATION_FILE} in the '
-              "package's config folder"),
+    ParamSpec('servo_calibration_file', '', f'servo calibration YAML; empty = {SERVO_CALIBRATION_FILE} in '
+              "the package's config folder"),
     ParamSpec('fsr_calibration_file', '', f'FSR calibration YAML; empty = {FSR_CALIBRATION_FILE} in the '
               "package's config folder"),
-    ParamSpec('reply_timeout', 0.02, 'seconds to wait for a board reply before counting it short', 0.001, 1.0),
+    ParamSpec('reply_timeout', 0.02, 'seconds to wait for a board reply before counting it short',
+              0.001, 1.0),
     ParamSpec('reconnect_initial', 0.1, 'first wait (s) before reopening a vanished port; doubles per failed '
               'attempt', 0.01, 60.0),
     ParamSpec('reconnect_max', 2.0, 'longest wait (s) between reopen attempts', 0.01, 600.0),
@@ -86,8 +87,8 @@ class BridgeConfig:
     def __post_init__(self) -> None:
         channels = self.servo_channels + self.fsr_channels
         if len(set(channels)) != len(channels):
-            raise BridgeConfigError(f'servo and FSR channels must all differ, got servos {self.servo_channels} '
-                                    f'and FSRs {self.fsr_channels}')
+            raise BridgeConfigError(f'servo and FSR channels must all differ, got servos '
+                                    f'{self.servo_channels} and FSRs {self.fsr_channels}')
         if self.board not in BOARD_KINDS:
             raise BridgeConfigError(f'board must be one of {", ".join(BOARD_KINDS)}, got {self.board!r}')
         if self.reconnect_initial > self.reconnect_max:
@@ -99,9 +100,10 @@ class BridgeConfig:
     @classmethod
     def from_values(cls, values: dict[str, Any]) -> BridgeConfig:
         """Build the config from checked parameter values (as returned by params.declare_and_read)."""
-        return cls(port=values['port'], robot_id=values['robot_id'], board=values['board'], baud=values['baud'],
-                   servo_channels=(values['arm1_channel'], values['arm2_channel']),
-                   fsr_channels=tuple(values[f'fsr_{face}_channel'] for face in topics.FSR_FACES),  # type: ignore[arg-type]
+        fsr = [values[f'fsr_{face}_channel'] for face in topics.FSR_FACES]
+        return cls(port=values['port'], robot_id=values['robot_id'], board=values['board'],
+                   baud=values['baud'], servo_channels=(values['arm1_channel'], values['arm2_channel']),
+                   fsr_channels=(fsr[0], fsr[1], fsr[2], fsr[3]),
                    fsr_rate_hz=values['fsr_rate_hz'], watchdog_timeout=values['watchdog_timeout'],
                    default_speed=values['default_speed'],
                    servo_calibration_file=values['servo_calibration_file'],
@@ -165,7 +167,8 @@ def check_command(names: Sequence[str], positions: Sequence[float], velocities: 
     """Check one JointState-like command against the joints' angle ``limits`` (rad)."""
     out = CheckedCommand()
     if len(positions) != len(names):
-        out.flag('rejected_commands', f'joint command ignored: {len(names)} names but {len(positions)} positions')
+        out.flag('rejected_commands', f'joint command ignored: {len(names)} names but {len(positions)} '
+                                      'positions')
         return out
     if len(velocities) not in (0, len(names)):
         out.flag('rejected_commands', f'joint command ignored: {len(names)} names but {len(velocities)} '
@@ -187,9 +190,9 @@ def check_command(names: Sequence[str], positions: Sequence[float], velocities: 
         lo, hi = limits[name]
         if not lo <= target <= hi:
             clamped = min(max(target, lo), hi)
-            out.flag('clamped_targets', f'joint command: {name} target {math.degrees(target):.1f} deg is outside '
-                                        f'{math.degrees(lo):.1f}..{math.degrees(hi):.1f} deg; clamped to '
-                                        f'{math.degrees(clamped):.1f}')
+            out.flag('clamped_targets', f'joint command: {name} target {math.degrees(target):.1f} deg is '
+                                        f'outside {math.degrees(lo):.1f}..{math.degrees(hi):.1f} deg; '
+                                        f'clamped to {math.degrees(clamped):.1f}')
             target = clamped
         speed = float(velocities[i]) if velocities else fallback_speed
         if not (math.isfinite(speed) and speed > 0.0):
@@ -253,7 +256,8 @@ class ServoBridgeCore:
         self.link = link
         self.board = board
         self.fsrs = [fsrs[face] for face in topics.FSR_FACES]
-        self.joints = [_Joint(name, ch, servos[name]) for name, ch in zip(topics.JOINT_NAMES, config.servo_channels)]
+        self.joints = [_Joint(name, ch, servos[name])
+                       for name, ch in zip(topics.JOINT_NAMES, config.servo_channels, strict=True)]
         self.limits = {j.name: j.cal.angle_limits() for j in self.joints}
         self.counters = Counters()
         self.last_command_time: float | None = None
@@ -285,7 +289,9 @@ class ServoBridgeCore:
                     joint.speed = checked.speeds[joint.name]
             self.last_command_time = now
             self.holding = False
-            checked.warnings.extend(self._sync(now))
+            port_error = self._sync(now)
+            if port_error:
+                checked.warnings.append(port_error)
         return checked.warnings
 
     def step(self, now: float) -> StepResult:
@@ -296,19 +302,20 @@ class ServoBridgeCore:
             result.events.append(f'port {self.link.port} opened')
             result.warnings.extend(self._on_open(now))
         self._watchdog(now, result)
-        result.warnings.extend(self._sync(now))
+        self._sync(now)    # a port lost here is reported as an event below
         if self.link.is_open:
             try:
                 counts = self.board.read_analog(self.config.fsr_channels)
                 result.fsr_counts = tuple(counts)
-                result.fsr_newtons = tuple(model.newtons(c) for model, c in zip(self.fsrs, counts))
+                result.fsr_newtons = tuple(m.newtons(c) for m, c in zip(self.fsrs, counts, strict=True))
                 self.counters.add('fsr_samples')
             except ReplyError as err:
                 result.warnings.append(self._count_reply_error(err))
-            except PortUnavailable as err:
-                result.warnings.append(str(err))
+            except PortUnavailable:
+                pass       # reported as an event below
         if was_open and not self.link.is_open:
-            result.events.append(f'port {self.link.port} lost ({self.link.last_error}); reopening with back-off')
+            result.events.append(f'port {self.link.port} lost ({self.link.last_error}); '
+                                 'reopening with back-off')
         if self.link.is_open and all(j.model.known for j in self.joints):
             result.joint_positions = tuple(j.cal.pulse_to_angle(j.model.position(now)) for j in self.joints)
             result.joint_velocities = tuple(j.model.velocity(now) / j.cal.us_per_rad for j in self.joints)
@@ -333,13 +340,15 @@ class ServoBridgeCore:
     def status(self, now: float) -> BridgeStatus:
         """Summarise port, watchdog and counters for /diagnostics."""
         link = self.link
-        reply_errors = sum(self.counters.as_dict()[k] for k in ('short_reply', 'garbage', 'malformed', 'bad_reply'))
+        counts = self.counters.as_dict()
+        reply_errors = sum(counts[k] for k in ('short_reply', 'garbage', 'malformed', 'bad_reply'))
         new_reply_errors = reply_errors - self._reported_reply_errors
         self._reported_reply_errors = reply_errors
         age = None if self.last_command_time is None else now - self.last_command_time
         if not link.is_open:
             level = Level.ERROR
-            message = f'port {link.port} down ({link.last_error}); next attempt in {link.seconds_to_retry():.2f} s'
+            message = (f'port {link.port} down ({link.last_error}); '
+                       f'next attempt in {link.seconds_to_retry():.2f} s')
         elif self.holding:
             level = Level.WARN
             message = f'watchdog: no joint command for {age:.2f} s, arms held'
@@ -358,6 +367,7 @@ class ServoBridgeCore:
             'port_opens': str(link.opens),
             'port_disconnects': str(link.disconnects),
             'failed_opens': str(link.failed_opens),
+            'discarded_bytes': str(link.discarded_bytes),
             'last_port_error': link.last_error,
             'watchdog': 'holding' if self.holding else 'ok',
             'watchdog_timeout_s': f'{self.config.watchdog_timeout:g}',
@@ -405,10 +415,10 @@ class ServoBridgeCore:
                 joint.model.set_target(pulse, now)
         return warnings
 
-    def _sync(self, now: float) -> list[str]:
-        """Send each joint's speed and target to the board when they differ from what it has."""
+    def _sync(self, now: float) -> str:
+        """Send speeds and targets that differ from what the board has; return '' or the port error."""
         if not self.link.is_open:
-            return []
+            return ''
         try:
             for joint in self.joints:
                 if joint.target is None:
@@ -424,8 +434,8 @@ class ServoBridgeCore:
                     joint.model.set_target(actual, now)
                     joint.sent_pulse = pulse
         except PortUnavailable as err:
-            return [str(err)]
-        return []
+            return str(err)
+        return ''
 
     def _count_reply_error(self, err: ReplyError) -> str:
         self.counters.add(err.kind)

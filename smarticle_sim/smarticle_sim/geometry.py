@@ -12,7 +12,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .config import RobotSpec
+from .settings import RobotSpec
 
 TWO_PI = 2.0 * math.pi
 
@@ -88,12 +88,13 @@ def pair_coordinates(pose1: tuple[float, float, float], pose2: tuple[float, floa
                      body_length: float) -> PairCoordinates:
     """(r, theta, phi) of robot 2 relative to robot 1 from poses (x, y, heading); r in body lengths.
 
-    r = centre distance / BL; theta = angle of the centre-to-centre vector measured from robot 1's
-    normal, counter-clockwise (toward robot 1's arm-1 side); phi = heading2 - heading1; both in [0, 2 pi).
+    r = centre distance / BL; theta = polar angle of robot 2's centre in robot 1's body frame, measured
+    counter-clockwise from robot 1's body x axis (toward joint 2), so theta = pi/2 is straight ahead
+    along robot 1's normal; phi = heading2 - heading1; both in [0, 2 pi) (as smarticle_tracking.gliders).
     """
     dx, dy = pose2[0] - pose1[0], pose2[1] - pose1[1]
     r = math.hypot(dx, dy) / body_length
-    theta = (math.atan2(dy, dx) - pose1[2]) % TWO_PI
+    theta = (math.atan2(dy, dx) - (pose1[2] - math.pi / 2.0)) % TWO_PI
     phi = (pose2[2] - pose1[2]) % TWO_PI
     return PairCoordinates(r, theta, phi)
 
@@ -101,7 +102,7 @@ def pair_coordinates(pose1: tuple[float, float, float], pose2: tuple[float, floa
 def place_pair(pose1: tuple[float, float, float], coords: PairCoordinates,
                body_length: float) -> tuple[float, float, float]:
     """Pose (x, y, heading) of robot 2 with pair coordinates ``coords`` relative to ``pose1``."""
-    angle = pose1[2] + coords.theta
+    angle = pose1[2] - math.pi / 2.0 + coords.theta
     dist = coords.r * body_length
     return (pose1[0] + dist * math.cos(angle), pose1[1] + dist * math.sin(angle),
             wrap_angle(pose1[2] + coords.phi))

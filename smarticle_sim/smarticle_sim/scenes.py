@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from smarticle_driver.gait import GaitConfig, open_loop_angles
 
-from .config import RobotSpec
+from .settings import RobotSpec
 from .errors import SceneError
 from .geometry import PairCoordinates, Rect, place_pair, rect_corners, robot_rects, robots_overlap
 
@@ -49,7 +49,8 @@ class Scene:
         for k, robot in enumerate(self.robots):
             values = (robot.x, robot.y, robot.heading, robot.alpha1, robot.alpha2)
             if not all(math.isfinite(v) for v in values):
-                raise SceneError(f'scene {self.name!r}: robot {k} has a non-finite pose or arm angle {values}')
+                raise SceneError(f'scene {self.name!r}: robot {k} has a non-finite pose or arm angle '
+                                 f'{values}')
             rects = robot.rects(spec)
             corners = np.concatenate([rect_corners(r) for r in rects])
             if np.abs(corners).max() > half:
@@ -107,7 +108,7 @@ def dense_scene(spec: RobotSpec, gait: GaitConfig, n: int = 7, seed: int = 0,
     limit = 4.0 * spec.reach
     while spacing <= limit:
         pts = (base + offsets) * spacing
-        scene = Scene(tuple(_placement(p[0], p[1], h, gait) for p, h in zip(pts, headings)),
+        scene = Scene(tuple(_placement(p[0], p[1], h, gait) for p, h in zip(pts, headings, strict=True)),
                       name='dense', seed=seed)
         try:
             scene.validate(spec, math.inf, gap)
@@ -123,7 +124,8 @@ def pair_scene(spec: RobotSpec, gait: GaitConfig, r: float, theta: float, phi: f
     """Two robots at pair coordinates (r in BL, theta, phi in rad) with gait phases ``phases``.
 
     Robot 1 sits at ``centre`` with normal ``heading1``; robot 2's centre is r BL away in the direction
-    theta counter-clockwise from robot 1's normal, and its normal is robot 1's turned by phi.
+    theta counter-clockwise from robot 1's body x axis (theta = pi/2: straight ahead along its normal),
+    and its normal is robot 1's turned by phi.
     Raises SceneError if the two overlap in their starting shapes.
     """
     if not (math.isfinite(r) and r > 0.0):

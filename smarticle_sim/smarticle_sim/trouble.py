@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from .config import PhysicsConfig
+from .settings import PhysicsConfig
 from .errors import SimTrouble
 
 

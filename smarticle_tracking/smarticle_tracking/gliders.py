@@ -122,7 +122,7 @@ def frame_hits(r: ArrayLike, r_bind: float, contacts: ArrayLike | None = None) -
     """Per frame and pair: touching (``contacts``) or r < r_bind; an unseen (NaN) r never binds."""
     r_arr = np.asarray(r, dtype=float)
     with np.errstate(invalid='ignore'):
-        hits = np.isfinite(r_arr) & (r_arr < r_bind)
+        hits: BoolArray = np.isfinite(r_arr) & (r_arr < r_bind)
     if contacts is not None:
         hits = hits | np.asarray(contacts, dtype=bool)
     return hits
@@ -226,6 +226,7 @@ class GliderAnalysis:
     config: GliderConfig
     t0: float
     times: FloatArray           # (T,) frame times used (at or after t0)
+    poses: FloatArray           # (T, N, 3) the poses of those frames (unseen: NaN)
     coords: PairCoordinates     # (T, P) r, theta, phi and the pair list
     periods: PeriodTable
     gliders: tuple[Glider, ...]
@@ -300,7 +301,7 @@ def period_table(times: FloatArray, coords: PairCoordinates, centres: FloatArray
     padded = np.concatenate([centres, np.full((1, n_pairs, 2), np.nan)], axis=0)
     strobe = np.full((n_periods, n_pairs, 2), np.nan)
     strobe[rows] = padded[first, np.arange(n_pairs)[None, :]]
-    start_times = t0 + period * np.arange(n_periods)
+    start_times = t0 + period * np.arange(n_periods, dtype=float)
     return PeriodTable(start_times, bound, sums, strobe)
 
 
@@ -351,12 +352,11 @@ def analyse_gliders(times: ArrayLike, poses: ArrayLike, config: GliderConfig | N
     table = period_table(t, coords, pair_centres(arr, pairs), frame_hits(coords.r, cfg.r_bind, mask),
                          start, cfg.period)
     runs = bound_runs(table.bound)
-    long_enough = (runs.stop - runs.start) >= cfg.min_periods
-    order = np.lexsort((runs.pair[long_enough], runs.start[long_enough]))
-    gliders = tuple(measure_run(table, pairs, int(p), int(s), int(e), cfg)
-                    for p, s, e in zip(runs.pair[long_enough][order], runs.start[long_enough][order],
-                                       runs.stop[long_enough][order]))
-    return GliderAnalysis(cfg, start, t, coords, table, gliders)
+    chosen = np.flatnonzero((runs.stop - runs.start) >= cfg.min_periods)
+    chosen = chosen[np.lexsort((runs.pair[chosen], runs.start[chosen]))]   # by start, then pair
+    gliders = tuple(measure_run(table, pairs, int(runs.pair[k]), int(runs.start[k]), int(runs.stop[k]), cfg)
+                    for k in chosen)
+    return GliderAnalysis(cfg, start, t, arr, coords, table, gliders)
 
 
 def ensemble_msd(gliders: Iterable[Glider], max_lag: int | None = None,
@@ -407,6 +407,7 @@ def format_glider_table(rows: Sequence[Mapping[str, object]]) -> str:
     header = [title for _, title, _ in TABLE_COLUMNS]
     body = [[_cell(fmt, row[key]) for key, _, fmt in TABLE_COLUMNS] for row in rows]
     widths = [max(len(line[c]) for line in [header, *body]) for c in range(len(header))]
-    lines = ['  '.join(cell.rjust(w) for cell, w in zip(line, widths)) for line in [header, *body]]
+    lines = ['  '.join(cell.rjust(w) for cell, w in zip(line, widths, strict=True))
+             for line in [header, *body]]
     lines.insert(1, '  '.join('-' * w for w in widths))
     return '\n'.join(lines)

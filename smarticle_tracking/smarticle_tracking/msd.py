@@ -80,12 +80,12 @@ def msd(paths: ArrayLike | Sequence[ArrayLike], max_lag: int | None = None,
     counts = np.zeros(lags.size, dtype=np.intp)
     dim = arrays[0].shape[1]
     finite = [np.all(np.isfinite(p), axis=1) for p in arrays]
-    clean = [np.where(ok[:, None], p, 0.0) for p, ok in zip(arrays, finite)]
+    clean = [np.where(ok[:, None], p, 0.0) for p, ok in zip(arrays, finite, strict=True)]
     for n, lag in enumerate(lags):
         total_sq = 0.0
         total = np.zeros(dim)
         count = 0
-        for path, ok in zip(clean, finite):
+        for path, ok in zip(clean, finite, strict=True):
             if lag >= len(path):
                 continue
             both = ok[lag:] & ok[:-lag]

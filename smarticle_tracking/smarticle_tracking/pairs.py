@@ -49,13 +49,15 @@ def wrap_angle(angle: ArrayLike) -> FloatArray:
     """Wrap angles (rad) to [0, 2 pi); NaN stays NaN."""
     wrapped = np.mod(np.asarray(angle, dtype=float), TWO_PI)
     # np.mod returns exactly 2 pi for tiny negative inputs; fold that onto 0.
-    return np.where(wrapped >= TWO_PI, 0.0, wrapped)
+    folded: FloatArray = np.where(wrapped >= TWO_PI, 0.0, wrapped)
+    return folded
 
 
 def angular_distance(a: ArrayLike, b: ArrayLike) -> FloatArray:
     """Unsigned distance between angles ``a`` and ``b`` on the circle (rad, [0, pi])."""
     diff = np.mod(np.asarray(a, dtype=float) - np.asarray(b, dtype=float) + math.pi, TWO_PI)
-    return np.abs(diff - math.pi)
+    distance: FloatArray = np.abs(diff - math.pi)
+    return distance
 
 
 def to_body_lengths(length: ArrayLike, body_length: float = BODY_LENGTH) -> FloatArray:

@@ -115,7 +115,8 @@ def scan(path: Path) -> McapScan:
         statistics: Statistics | None = None
         while True:
             if offset + 9 > size:
-                result.problems.append(f'file ends at byte {size} without a footer (the recording was interrupted)')
+                result.problems.append(
+                    f'file ends at byte {size} without a footer (the recording was interrupted)')
                 break
             handle.seek(offset)
             opcode, length = struct.unpack('<BQ', handle.read(9))

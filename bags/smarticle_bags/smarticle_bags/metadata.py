@@ -182,4 +182,5 @@ def read_metadata(folder: Path) -> BagInfo:
             custom_data={str(k): str(v) for k, v in custom.items()} if isinstance(custom, dict) else None,
             ros_distro=str(info.get('ros_distro', '') or ''), version=version)
     except (TypeError, ValueError, KeyError) as err:
-        raise MetadataError(f'{where}: malformed entry ({err}); run "smarticle-bag reindex {folder}"') from err
+        raise MetadataError(
+            f'{where}: malformed entry ({err}); run "smarticle-bag reindex {folder}"') from err

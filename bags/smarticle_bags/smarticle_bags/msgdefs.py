@@ -77,7 +77,8 @@ def msg_file(type_name: str) -> Path:
     if share is None:
         raise MessageDefinitionError(
             f'message package {package!r} is not installed (no share/{package} under '
-            f'{", ".join(str(s) for s in share_dirs()) or "AMENT_PREFIX_PATH"}); install it or source its workspace')
+            f'{", ".join(str(s) for s in share_dirs()) or "AMENT_PREFIX_PATH"}); '
+            'install it or source its workspace')
     path = share / 'msg' / f'{name}.msg'
     if not path.is_file():
         raise MessageDefinitionError(f'{type_name}: no file {path}')

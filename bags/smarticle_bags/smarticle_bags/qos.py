@@ -121,5 +121,6 @@ def playback_profile(offered: list[QosRecord]) -> Any:
     best_effort = bool(offered) and all(p.reliability == 'best_effort' for p in offered)
     latched = bool(offered) and all(p.durability == 'transient_local' for p in offered)
     return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=max([10] + [p.depth for p in offered]),
-                      reliability=ReliabilityPolicy.BEST_EFFORT if best_effort else ReliabilityPolicy.RELIABLE,
+                      reliability=(ReliabilityPolicy.BEST_EFFORT if best_effort
+                                   else ReliabilityPolicy.RELIABLE),
                       durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)

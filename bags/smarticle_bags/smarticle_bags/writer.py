@@ -58,7 +58,8 @@ class WriterOptions:
         if self.max_bag_size < 0:
             raise OptionError(f'max bag size must be >= 0 bytes (0 = no splitting), got {self.max_bag_size}')
         if self.max_bag_duration < 0:
-            raise OptionError(f'max bag duration must be >= 0 (0 = no splitting), got {self.max_bag_duration}')
+            raise OptionError(
+                f'max bag duration must be >= 0 (0 = no splitting), got {self.max_bag_duration}')
 
 
 #: ``--storage-preset-profile`` names (as in rosbag2's mcap plugin) and what they mean here.
@@ -122,7 +123,8 @@ class BagWriter:
         self.folder = Path(folder)
         self.options = options or WriterOptions()
         if self.folder.exists() and (not self.folder.is_dir() or any(self.folder.iterdir())):
-            raise BagExistsError(f'output {self.folder} exists already; choose another -o/--output or remove it')
+            raise BagExistsError(
+                f'output {self.folder} exists already; choose another -o/--output or remove it')
         self.folder.mkdir(parents=True, exist_ok=True)
         self.info = BagInfo(custom_data=custom_data)
         self._topics: dict[str, tuple[TopicInfo, str]] = {}
@@ -228,7 +230,8 @@ class BagWriter:
         metadata = {'offered_qos_profiles': dump_profiles(topic.offered_qos_profiles),
                     'topic_type_hash': topic.type_description_hash}
         storage.channels[topic.name] = storage.mcap.register_channel(
-            topic=topic.name, message_encoding=topic.serialization_format, schema_id=schema, metadata=metadata)
+            topic=topic.name, message_encoding=topic.serialization_format, schema_id=schema,
+            metadata=metadata)
 
     def _finish(self, storage: _StorageFile) -> None:
         """Write the summary and footer of ``storage`` and close it."""

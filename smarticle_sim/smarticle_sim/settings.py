@@ -121,7 +121,7 @@ class PhysicsConfig:
     max_tilt: float = math.radians(25.0)        # trouble: body z axis tilted beyond this
     max_speed: float = 2.0                      # trouble: body speed (m/s)
     max_penetration: float = 0.004              # trouble: contact overlap (m)
-    trouble_every: int = 1                      # check poses every n ticks (penetration: when contacts are read)
+    trouble_every: int = 6                      # check for trouble every n control ticks
 
     def __post_init__(self) -> None:
         _positive(self, 'time_step', 'control_tick', 'plate_size', 'plate_thickness', 'max_tilt',
@@ -166,7 +166,8 @@ class SimConfig:
         known = {f.name for f in fields(PhysicsConfig)}
         unknown = sorted(set(physics) - known)
         if unknown:
-            raise ConfigError(f'unknown PhysicsConfig field(s) {", ".join(unknown)}; known: {", ".join(sorted(known))}')
+            raise ConfigError(f'unknown PhysicsConfig field(s) {", ".join(unknown)}; '
+                              f'known: {", ".join(sorted(known))}')
         return cls(robot_preset(preset), PhysicsConfig(**physics))
 
     def with_physics(self, **changes: Any) -> SimConfig:

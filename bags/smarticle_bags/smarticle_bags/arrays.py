@@ -1,0 +1,170 @@
+"""Offline analysis input: the smarticle topics of a bag as NumPy arrays (no ROS needed).
+
+Times come twice: ``log_time`` (when the recorder received the message) and ``stamp`` (the
+message's header stamp; sim time in simulation), both in seconds as float64.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Iterable
+
+import numpy as np
+import numpy.typing as npt
+
+from smarticle_driver import topics as contract
+
+from .reader import BagReader
+
+FloatArray = npt.NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class PoseSeries:
+    """Planar poses of all robots: ``xyh[t, robot] = (x, y, heading)`` in m, m, rad (NaN if missing)."""
+
+    log_time: FloatArray
+    stamp: FloatArray
+    xyh: FloatArray
+
+
+@dataclass(frozen=True)
+class JointSeries:
+    """JointState samples: one column per name, NaN where a message lacks that name or field."""
+
+    names: tuple[str, ...]
+    log_time: FloatArray
+    stamp: FloatArray
+    position: FloatArray
+    velocity: FloatArray
+    effort: FloatArray
+
+
+@dataclass(frozen=True)
+class DiagnosticsTable:
+    """One row per DiagnosticStatus: times, name, hardware id, level, message, and its key/values."""
+
+    log_time: FloatArray
+    stamp: FloatArray
+    name: npt.NDArray[np.str_]
+    hardware_id: npt.NDArray[np.str_]
+    level: npt.NDArray[np.int64]
+    message: npt.NDArray[np.str_]
+    values: dict[str, npt.NDArray[Any]]
+
+
+def yaw_of(qx: float, qy: float, qz: float, qw: float) -> float:
+    """Return the yaw (rotation about z, rad) of a quaternion."""
+    return math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+
+
+def _stamp(msg: Any) -> float:
+    """Return the header stamp of a decoded message in seconds."""
+    return float(msg.header.stamp.sec) + 1e-9 * float(msg.header.stamp.nanosec)
+
+
+def poses_from_messages(items: Iterable[tuple[int, Any]]) -> PoseSeries:
+    """Build a PoseSeries from (log time ns, decoded PoseArray) pairs; robots missing later are NaN."""
+    rows: list[list[tuple[float, float, float]]] = []
+    log_time: list[float] = []
+    stamp: list[float] = []
+    for log_ns, msg in items:
+        log_time.append(log_ns * 1e-9)
+        stamp.append(_stamp(msg))
+        rows.append([(p.position.x, p.position.y,
+                      yaw_of(p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w))
+                     for p in msg.poses])
+    width = max((len(r) for r in rows), default=0)
+    xyh = np.full((len(rows), width, 3), np.nan)
+    for t, row in enumerate(rows):
+        if row:
+            xyh[t, :len(row)] = row
+    return PoseSeries(np.array(log_time), np.array(stamp), xyh)
+
+
+def joints_from_messages(items: Iterable[tuple[int, Any]]) -> JointSeries:
+    """Build a JointSeries from (log time ns, decoded JointState) pairs (columns in first-seen order)."""
+    names: list[str] = []
+    samples: list[tuple[float, float, dict[str, tuple[float, float, float]]]] = []
+    for log_ns, msg in items:
+        values: dict[str, tuple[float, float, float]] = {}
+        for i, name in enumerate(msg.name):
+            if name not in names:
+                names.append(name)
+            values[name] = tuple(  # type: ignore[assignment]
+                float(field[i]) if i < len(field) else math.nan
+                for field in (msg.position, msg.velocity, msg.effort))
+        samples.append((log_ns * 1e-9, _stamp(msg), values))
+    data = np.full((3, len(samples), len(names)), np.nan)
+    for t, (_, _, values) in enumerate(samples):
+        for j, name in enumerate(names):
+            if name in values:
+                data[:, t, j] = values[name]
+    return JointSeries(tuple(names), np.array([s[0] for s in samples]), np.array([s[1] for s in samples]),
+                       data[0], data[1], data[2])
+
+
+def _column(values: list[str]) -> npt.NDArray[Any]:
+    """Return a float column if every non-empty value parses as a number, else a string column."""
+    try:
+        return np.array([float(v) if v != '' else math.nan for v in values])
+    except ValueError:
+        return np.array(values, dtype=str)
+
+
+def diagnostics_from_messages(items: Iterable[tuple[int, Any]]) -> DiagnosticsTable:
+    """Flatten (log time ns, decoded DiagnosticArray) pairs into one row per status."""
+    rows: list[tuple[float, float, Any]] = []
+    for log_ns, msg in items:
+        for status in msg.status:
+            rows.append((log_ns * 1e-9, _stamp(msg), status))
+    keys: list[str] = []
+    for _, _, status in rows:
+        for kv in status.values:
+            if kv.key not in keys:
+                keys.append(kv.key)
+    values = {key: _column([next((kv.value for kv in s.values if kv.key == key), '') for _, _, s in rows])
+              for key in keys}
+    return DiagnosticsTable(
+        np.array([r[0] for r in rows]), np.array([r[1] for r in rows]),
+        np.array([r[2].name for r in rows], dtype=str), np.array([r[2].hardware_id for r in rows], dtype=str),
+        np.array([int.from_bytes(r[2].level, 'little') if isinstance(r[2].level, bytes) else int(r[2].level)
+                  for r in rows], dtype=np.int64),
+        np.array([r[2].message for r in rows], dtype=str), values)
+
+
+def _decoded(reader: BagReader, topic: str) -> list[tuple[int, Any]]:
+    """Return (log time, decoded message) pairs of one topic of the bag."""
+    return [(raw.log_time, msg) for raw, msg in reader.decoded([topic])]
+
+
+def read_poses(reader: BagReader, topic: str = contract.topic('poses')) -> PoseSeries:
+    """Return the PoseArray topic (default ``/smarticles/poses``) as (T, N, 3) x, y, heading."""
+    return poses_from_messages(_decoded(reader, topic))
+
+
+def read_joints(reader: BagReader, topic: str) -> JointSeries:
+    """Return a JointState topic (joint states, joint commands or FSR) as arrays."""
+    return joints_from_messages(_decoded(reader, topic))
+
+
+def read_robot_topic(reader: BagReader, key: str) -> dict[int, JointSeries]:
+    """Return a per-robot JointState topic (``joint_states``, ``joint_commands``, ``fsr``) for every robot."""
+    contract.spec_of(key)
+    found: dict[int, JointSeries] = {}
+    for name in sorted(reader.topics):
+        parsed = contract.parse_robot_topic(name)
+        if parsed is not None and parsed[1] == key:
+            found[parsed[0]] = read_joints(reader, name)
+    return found
+
+
+def read_fsr(reader: BagReader) -> dict[int, JointSeries]:
+    """Return the FSR forces of every robot (``effort`` columns, in N, named by face)."""
+    return read_robot_topic(reader, 'fsr')
+
+
+def read_gliders(reader: BagReader, topic: str = contract.topic('gliders')) -> DiagnosticsTable:
+    """Return the glider monitor's DiagnosticArray topic as one row per bound pair and time."""
+    return diagnostics_from_messages(_decoded(reader, topic))

@@ -1,0 +1,208 @@
+"""``smarticle-bag``: info, record, play, analyze, export and reindex, with ``ros2 bag``'s flag names."""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import logging
+import sys
+from pathlib import Path
+from typing import Any
+
+from .errors import BagError
+from .settings import PLAYER_PARAMS, RECORDER_PARAMS, default
+
+PROG = 'smarticle-bag'
+
+
+def _split_ros_args(argv: list[str]) -> tuple[list[str], list[str] | None]:
+    """Split ``argv`` at ``--ros-args`` into (our arguments, rclpy arguments or None)."""
+    if '--ros-args' in argv:
+        at = argv.index('--ros-args')
+        return argv[:at], [PROG, *argv[at:]]
+    return argv, None
+
+
+def _add_record(sub: Any) -> None:
+    """Add the ``record`` subcommand."""
+    p = sub.add_parser('record', help='record topics into a rosbag2-compatible mcap bag',
+                       description='Record topics into a bag folder (metadata.yaml + .mcap). '
+                                   'Stop with Ctrl-C; a killed recorder leaves a bag readable up to the '
+                                   'last flushed chunk (repair it with "smarticle-bag reindex").')
+    p.add_argument('topic_names', nargs='*', metavar='TOPIC', help='topics to record')
+    p.add_argument('--topics', nargs='+', default=[], metavar='TOPIC',
+                   help='topics to record (same as positional)')
+    p.add_argument('-a', '--all', action='store_true',
+                   help='record all topics, including ones that appear later')
+    p.add_argument('-e', '--regex', default=default(RECORDER_PARAMS, 'regex'),
+                   help='record topics matching this regular expression')
+    p.add_argument('-x', '--exclude-regex', default=default(RECORDER_PARAMS, 'exclude_regex'),
+                   help='never record topics matching this regular expression')
+    p.add_argument('--include-hidden-topics', action='store_true', help='let -a/-e match hidden topics')
+    p.add_argument('-o', '--output', default=default(RECORDER_PARAMS, 'output'),
+                   help='bag folder to create (default: rosbag2_YYYY_MM_DD-HH_MM_SS)')
+    p.add_argument('-s', '--storage', default='mcap', choices=['mcap'], help='storage plugin (only mcap)')
+    p.add_argument('--storage-preset-profile', default=default(RECORDER_PARAMS, 'storage_preset_profile'),
+                   choices=['none', 'fastwrite', 'zstd_fast', 'zstd_small', 'lz4'],
+                   help='mcap writer preset (chunk compression and size)')
+    p.add_argument('--compression-format', default=default(RECORDER_PARAMS, 'compression_format'),
+                   choices=['', 'zstd', 'lz4', 'none'], help='mcap chunk compression (overrides the preset)')
+    p.add_argument('--chunk-size', type=int, default=default(RECORDER_PARAMS, 'chunk_size'),
+                   help='mcap chunk size in bytes (0 = the preset)')
+    p.add_argument('-b', '--max-bag-size', type=int, default=default(RECORDER_PARAMS, 'max_bag_size'),
+                   help='split after this many bytes (0 = never)')
+    p.add_argument('-d', '--max-bag-duration', type=float,
+                   default=default(RECORDER_PARAMS, 'max_bag_duration'),
+                   help='split after this many seconds (0 = never)')
+    p.add_argument('--flush-interval', type=float, default=default(RECORDER_PARAMS, 'flush_interval'),
+                   help='write the open chunk to disk at least every this many seconds')
+    p.add_argument('--polling-interval', type=float,
+                   default=default(RECORDER_PARAMS, 'topic_polling_interval'),
+                   help='look for new topics every this many seconds')
+
+
+def _add_play(sub: Any) -> None:
+    """Add the ``play`` subcommand."""
+    p = sub.add_parser('play', help='replay a bag into live nodes',
+                       description='Replay a bag (folder or .mcap, ours or made by rosbag2) with its '
+                                   'recorded '
+                                   'timing. Pause/resume: publish std_msgs/msg/Bool on /player/pause '
+                                   '(true/false), or press space in the terminal.')
+    p.add_argument('bag', help='bag folder or .mcap file')
+    p.add_argument('--topics', nargs='+', default=[], metavar='TOPIC', help='play only these topics')
+    p.add_argument('-m', '--remap', nargs='+', default=[], metavar='OLD:=NEW', help='publish OLD under NEW')
+    p.add_argument('-r', '--rate', type=float, default=default(PLAYER_PARAMS, 'rate'),
+                   help='speed factor (> 0)')
+    p.add_argument('-l', '--loop', action='store_true',
+                   help='play again from the start when the end is reached')
+    p.add_argument('--clock', type=float, nargs='?', const=40.0, default=default(PLAYER_PARAMS, 'clock'),
+                   metavar='HZ', help='publish /clock from bag time (at 40 Hz if no rate is given)')
+    p.add_argument('--start-offset', type=float, default=default(PLAYER_PARAMS, 'start_offset'),
+                   help='start this many seconds into the bag')
+    p.add_argument('--playback-duration', type=float, default=default(PLAYER_PARAMS, 'playback_duration'),
+                   help='play this many seconds of bag time (0 = to the end)')
+    p.add_argument('-p', '--start-paused', action='store_true', help='start paused (resume: see above)')
+    p.add_argument('-d', '--delay', type=float, default=default(PLAYER_PARAMS, 'delay'),
+                   help='wait this many seconds before playing (lets subscribers connect)')
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Return the argument parser of ``smarticle-bag``."""
+    parser = argparse.ArgumentParser(prog=PROG, description='Record, replay and analyse rosbag2-compatible '
+                                     'mcap bags of smarticle runs (like "ros2 bag"). ROS arguments go '
+                                     'after --ros-args.')
+    sub = parser.add_subparsers(dest='command', required=True, metavar='COMMAND')
+    p = sub.add_parser('info', help='print a summary of a bag', description='Print a summary of a bag.')
+    p.add_argument('bag', help='bag folder or .mcap file')
+    p.add_argument('--strict', action='store_true', help='fail on a damaged file instead of salvaging it')
+    _add_record(sub)
+    _add_play(sub)
+    p = sub.add_parser('export', help='write the topics of a bag to CSV files',
+                       description='Write each topic to <out>/<topic>.csv '
+                                   '(poses as x, y, heading per robot).')
+    p.add_argument('bag', help='bag folder or .mcap file')
+    p.add_argument('-o', '--out', required=True, type=Path, help='folder for the CSV files')
+    p.add_argument('--topics', nargs='+', default=None, metavar='TOPIC', help='export only these topics')
+    p = sub.add_parser('analyze', help='glider analysis of the poses in a bag (smarticle_tracking)',
+                       description='Feed the bag\'s poses to smarticle_tracking.gliders.')
+    p.add_argument('bag', help='bag folder or .mcap file')
+    p.add_argument('--topic', default='/smarticles/poses', help='PoseArray topic with the robot poses')
+    p = sub.add_parser('reindex', help='rebuild metadata.yaml from the .mcap files, repairing damaged ones',
+                       description='Rebuild metadata.yaml; a damaged .mcap is rewritten with every readable '
+                                   'message and the original is kept as <name>.mcap.damaged.')
+    p.add_argument('bag', help='bag folder')
+    return parser
+
+
+def _record(ns: argparse.Namespace, ros_args: list[str] | None) -> int:
+    """Run the recorder in this process."""
+    from . import recorder_node
+
+    overrides = {
+        'output': ns.output, 'topics': ' '.join([*ns.topic_names, *ns.topics]), 'all': ns.all,
+        'regex': ns.regex, 'exclude_regex': ns.exclude_regex,
+        'include_hidden_topics': ns.include_hidden_topics,
+        'storage_preset_profile': ns.storage_preset_profile, 'compression_format': ns.compression_format,
+        'chunk_size': ns.chunk_size, 'max_bag_size': ns.max_bag_size, 'max_bag_duration': ns.max_bag_duration,
+        'flush_interval': ns.flush_interval, 'topic_polling_interval': ns.polling_interval,
+    }
+    return recorder_node.run(overrides, ros_args)
+
+
+def _play(ns: argparse.Namespace, ros_args: list[str] | None) -> int:
+    """Run the player in this process."""
+    from . import player_node
+
+    overrides = {
+        'bag': ns.bag, 'topics': ' '.join(ns.topics), 'remap': ' '.join(ns.remap), 'rate': ns.rate,
+        'loop': ns.loop, 'start_offset': ns.start_offset, 'playback_duration': ns.playback_duration,
+        'start_paused': ns.start_paused, 'clock': ns.clock, 'delay': ns.delay,
+    }
+    return player_node.run(overrides, ros_args)
+
+
+def _analyze(ns: argparse.Namespace) -> int:
+    """Feed the poses of a bag to smarticle_tracking.gliders, when that module is available."""
+    try:
+        gliders = importlib.import_module('smarticle_tracking.gliders')
+    except ImportError as err:
+        print(f'{PROG} analyze: the glider analysis (smarticle_tracking.gliders) is not available ({err}); '
+              f'install smarticle_tracking or use "{PROG} export" and analyse the CSV files', file=sys.stderr)
+        return 3
+    analyze = getattr(gliders, 'analyze_poses', None)
+    if analyze is None:
+        # TODO(bags): wire to the glider API once smarticle_tracking.gliders settles it.
+        print(f'{PROG} analyze: smarticle_tracking.gliders has no analyze_poses(times, xyh) entry point yet',
+              file=sys.stderr)
+        return 3
+    from . import arrays
+    from .reader import BagReader
+
+    poses = arrays.read_poses(BagReader(ns.bag), ns.topic)
+    print(analyze(poses.stamp, poses.xyh))
+    return 0
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Entry point of ``smarticle-bag``."""
+    ours, ros_args = _split_ros_args(list(sys.argv[1:] if argv is None else argv))
+    ns = build_parser().parse_args(ours)
+    logging.basicConfig(level=logging.WARNING, format=f'{PROG}: warning: %(message)s')
+    try:
+        raise SystemExit(_dispatch(ns, ros_args))
+    except BagError as err:
+        print(f'{PROG} {ns.command}: error: {err}', file=sys.stderr)
+        raise SystemExit(2) from None
+
+
+def _dispatch(ns: argparse.Namespace, ros_args: list[str] | None) -> int:
+    """Run one subcommand and return its exit code."""
+    from .reader import BagReader
+
+    if ns.command == 'record':
+        return _record(ns, ros_args)
+    if ns.command == 'play':
+        return _play(ns, ros_args)
+    if ns.command == 'analyze':
+        return _analyze(ns)
+    if ns.command == 'info':
+        from .info import format_info
+        print(format_info(BagReader(ns.bag, strict=ns.strict)), end='')
+        return 0
+    if ns.command == 'export':
+        from .export import export_bag
+        report = export_bag(BagReader(ns.bag), ns.out, ns.topics)
+        for topic, path in report.written.items():
+            print(f'{topic} -> {path}')
+        for topic, reason in report.skipped.items():
+            print(f'{topic}: skipped ({reason})', file=sys.stderr)
+        return 0
+    from .reindex import reindex
+    report = reindex(ns.bag)
+    for line in report.problems:
+        print(f'found: {line}')
+    for line in report.repaired:
+        print(f'repaired: {line}')
+    print(f'wrote {Path(ns.bag) / "metadata.yaml"}: {report.info.message_count} messages in '
+          f'{len(report.info.files)} files, {len(report.info.topics)} topics')
+    return 0

@@ -1,0 +1,144 @@
+"""ROS node `servo_bridge`: joint commands to a Pololu Maestro, joint states and FSR forces back.
+
+Subscribes ``/smarticle_<k>/joint_commands``; publishes ``/smarticle_<k>/joint_states`` (servo slew
+model: the Maestro reports commanded, not measured, pulses), ``/smarticle_<k>/fsr`` (newtons) at
+``fsr_rate_hz`` and ``/diagnostics``. All the work is in ``servo_bridge_core.ServoBridgeCore``; see
+docs/servo_bridge.md.
+"""
+
+from __future__ import annotations
+
+import re
+import time
+from typing import Any
+
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+
+from smarticle_driver import topics
+from smarticle_driver.errors import DriverError
+from smarticle_driver.params import ParameterError, declare_and_read
+from smarticle_driver.servo_bridge_core import NODE_NAME, PARAMS, BridgeConfig, ServoBridgeCore, StepResult
+
+#: Seconds between two log lines of the same kind of warning.
+WARN_THROTTLE = 2.0
+_NUMBERS = re.compile(r'[-+]?(\d+(\.\d*)?|nan|inf)')
+
+
+class ServoBridgeNode(Node):
+    """Thin ROS shell around ServoBridgeCore."""
+
+    def __init__(self) -> None:
+        super().__init__(NODE_NAME)
+        values = declare_and_read(self, PARAMS)
+        self.config = BridgeConfig.from_values(values)
+        self.core = ServoBridgeCore.from_config(self.config)
+        self._warned: dict[str, tuple[float, int]] = {}
+        k = self.config.robot_id
+        self._joint_state = topics.message_class('sensor_msgs/msg/JointState')
+        diag = topics.spec_of('diagnostics')
+        self._diag_array = topics.message_class(diag.type)
+        self._diag_status = topics.message_class('diagnostic_msgs/msg/DiagnosticStatus')
+        self._key_value = topics.message_class('diagnostic_msgs/msg/KeyValue')
+        states, fsr, commands = (topics.spec_of(key) for key in ('joint_states', 'fsr', 'joint_commands'))
+        self.joint_pub = self.create_publisher(self._joint_state, states.resolve(k),
+                                               topics.qos_profile(states.qos))
+        self.fsr_pub = self.create_publisher(self._joint_state, fsr.resolve(k), topics.qos_profile(fsr.qos))
+        self.diag_pub = self.create_publisher(self._diag_array, diag.resolve(), topics.qos_profile(diag.qos))
+        self.create_subscription(self._joint_state, commands.resolve(k), self.on_command,
+                                 topics.qos_profile(commands.qos))
+        self.step_timer = self.create_timer(1.0 / self.config.fsr_rate_hz, self.on_step)
+        self.diag_timer = self.create_timer(self.config.diagnostics_period, self.on_diagnostics)
+        self.get_logger().info(
+            f'robot {k}: {self.config.board} board on {self.config.port}, servos on channels '
+            f'{self.config.servo_channels}, FSRs on {self.config.fsr_channels} at '
+            f'{self.config.fsr_rate_hz:g} Hz; '
+            f'calibration {self.config.servo_calibration_path()} and {self.config.fsr_calibration_path()}')
+
+    def on_command(self, msg: Any) -> None:
+        """Pass a joint command to the core and log what was wrong with it."""
+        warnings = self.core.handle_command(list(msg.name), list(msg.position), list(msg.velocity),
+                                            time.monotonic())
+        self._warn(warnings)
+
+    def on_step(self) -> None:
+        """Run one bridge step and publish joint states and FSR forces."""
+        result = self.core.step(time.monotonic())
+        for event in result.events:
+            self.get_logger().info(event)
+        self._warn(result.warnings)
+        self._publish(result)
+
+    def on_diagnostics(self) -> None:
+        """Poll the board's error flags and publish the bridge's status on /diagnostics."""
+        self._warn(self.core.poll_board_errors())
+        status = self.core.status(time.monotonic())
+        item = self._diag_status()
+        item.level = bytes((int(status.level),))
+        item.name = f'smarticle_{self.config.robot_id}/{NODE_NAME}'
+        item.message = status.message
+        item.hardware_id = self.config.port
+        item.values = [self._key_value(key=key, value=value) for key, value in status.values.items()]
+        array = self._diag_array()
+        array.header.stamp = self.get_clock().now().to_msg()
+        array.status = [item]
+        self.diag_pub.publish(array)
+
+    def destroy_node(self) -> None:
+        """Close the serial port, then destroy the node."""
+        self.core.close()
+        super().destroy_node()
+
+    def _publish(self, result: StepResult) -> None:
+        stamp = self.get_clock().now().to_msg()
+        if result.joint_positions is not None and result.joint_velocities is not None:
+            msg = self._joint_state()
+            msg.header.stamp = stamp
+            msg.name = list(topics.JOINT_NAMES)
+            msg.position = list(result.joint_positions)
+            msg.velocity = list(result.joint_velocities)
+            self.joint_pub.publish(msg)
+        if result.fsr_newtons is not None:
+            msg = self._joint_state()
+            msg.header.stamp = stamp
+            msg.name = list(topics.FSR_FACES)
+            msg.effort = list(result.fsr_newtons)
+            self.fsr_pub.publish(msg)
+
+    def _warn(self, warnings: list[str]) -> None:
+        """Log warnings, each kind (the text without its numbers) at most once per WARN_THROTTLE."""
+        now = time.monotonic()
+        for text in warnings:
+            kind = _NUMBERS.sub('#', text)
+            last, skipped = self._warned.get(kind, (-WARN_THROTTLE, 0))
+            if now - last < WARN_THROTTLE:
+                self._warned[kind] = (last, skipped + 1)
+                continue
+            more = f' ({skipped} similar warnings not shown)' if skipped else ''
+            self.get_logger().warning(text + more)
+            self._warned[kind] = (now, 0)
+
+
+def main(args: list[str] | None = None) -> None:
+    """Entry point of `ros2 run smarticle_driver servo_bridge`."""
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = ServoBridgeNode()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except (ParameterError, DriverError) as err:
+        if node is None:
+            rclpy.logging.get_logger(NODE_NAME).fatal(f'cannot start: {err}')
+            raise SystemExit(2) from err
+        raise
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+
+
+if __name__ == '__main__':
+    main()

@@ -1,0 +1,111 @@
+"""Speed benchmark: World stepping (gait cores, trouble checks, recording) against a bare PyBullet loop."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import pybullet
+
+from .batch import run_trial, scene_period
+from .scenes import Scene
+from .settings import SimConfig
+from .world import ARM_JOINTS, World
+
+
+@dataclass(frozen=True)
+class BenchRow:
+    """One benchmark measurement: best wall time over repeats for a mode."""
+
+    mode: str
+    steps: int
+    seconds: float
+    sim_seconds: float
+
+    @property
+    def steps_per_second(self) -> float:
+        """Physics steps per wall-clock second."""
+        return self.steps / self.seconds
+
+    @property
+    def real_time_factor(self) -> float:
+        """Simulated seconds per wall-clock second."""
+        return self.sim_seconds / self.seconds
+
+
+def bare_loop(config: SimConfig, scene: Scene, periods: float) -> tuple[int, float]:
+    """Step the same scene with raw stepSimulation calls and corner targets sent at quarter boundaries."""
+    with World(config, scene) as world:
+        c = world.client
+        period = scene_period(scene)
+        steps = round(periods * period / config.physics.time_step)
+        quarter_steps = round(period / 4.0 / config.physics.time_step)
+        speed, torque = config.robot.servo_speed, config.robot.servo_torque
+        gain = config.physics.position_gain
+        schedule = []
+        for placement in scene.robots:
+            assert placement.gait is not None
+            q0 = math.floor(4.0 * placement.gait.phase)
+            schedule.append([placement.gait.corner(q0 + q + 1) for q in range(4)])
+        step = c.stepSimulation
+        start = time.perf_counter()
+        for i in range(steps):
+            if i % quarter_steps == 0:
+                q = (i // quarter_steps) % 4
+                for body, corners in zip(world.body_ids, schedule, strict=True):
+                    for j in ARM_JOINTS:
+                        c.setJointMotorControl2(body, j, pybullet.POSITION_CONTROL,
+                                                targetPosition=corners[q][j], force=torque,
+                                                maxVelocity=speed, positionGain=gain)
+            step()
+        return steps, time.perf_counter() - start
+
+
+def world_loop(config: SimConfig, scene: Scene, periods: float) -> tuple[int, float]:
+    """Run the World's own tick loop (gait cores, command on change, trouble checks), no recording."""
+    with World(config, scene) as world:
+        ticks = world.ticks_for(periods * scene_period(scene))
+        world.start_gaits(0.0)
+        start = time.perf_counter()
+        world.run(ticks)
+        return world.step_count, time.perf_counter() - start
+
+
+def batch_loop(config: SimConfig, scene: Scene, periods: float, sample_every: int,
+               record_fsr: bool) -> tuple[int, float]:
+    """Run a recorded batch trial and time it (world construction included)."""
+    start = time.perf_counter()
+    rec = run_trial(config, scene, periods, sample_every=sample_every, record_fsr=record_fsr,
+                    record_contacts=record_fsr)
+    seconds = time.perf_counter() - start
+    return round(rec.time[-1] / config.physics.time_step), seconds
+
+
+def benchmark(config: SimConfig, scene: Scene, periods: float = 10.0, repeats: int = 3) -> list[BenchRow]:
+    """Time every mode ``repeats`` times, interleaved, and keep each mode's best run."""
+    modes = {
+        'bare pybullet loop': lambda: bare_loop(config, scene, periods),
+        'World.run (gaits, trouble checks)': lambda: world_loop(config, scene, periods),
+        'batch, poses every tick, no FSR': lambda: batch_loop(config, scene, periods, 1, False),
+        'batch, poses+FSR+contacts every tick': lambda: batch_loop(config, scene, periods, 1, True),
+        'batch, poses+FSR+contacts every 4 ticks': lambda: batch_loop(config, scene, periods, 4, True),
+    }
+    best: dict[str, tuple[int, float]] = {}
+    for _ in range(repeats):
+        for name, fn in modes.items():
+            steps, seconds = fn()
+            if name not in best or seconds < best[name][1]:
+                best[name] = (steps, seconds)
+    dt = config.physics.time_step
+    return [BenchRow(name, steps, seconds, steps * dt) for name, (steps, seconds) in best.items()]
+
+
+def format_table(rows: list[BenchRow]) -> str:
+    """Render benchmark rows as a Markdown table with the overhead against the first row."""
+    base = rows[0].steps_per_second
+    lines = ['| mode | steps/s | x real time | vs bare loop |', '| --- | ---: | ---: | ---: |']
+    for row in rows:
+        lines.append(f'| {row.mode} | {row.steps_per_second:,.0f} | {row.real_time_factor:.1f} | '
+                     f'{100.0 * (row.steps_per_second / base - 1.0):+.1f} % |')
+    return '\n'.join(lines)

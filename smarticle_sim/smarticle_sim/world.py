@@ -1,0 +1,452 @@
+"""The physics wrapper: a PyBullet world of smarticles on a plate, driven by servo commands or gait cores.
+
+Each World owns its PyBullet client (``BulletClient(DIRECT)``), never the implicit global one, so
+several worlds can live in one process. A robot is one multibody: the body box as the base, resting on
+the plate, and two arm boxes on revolute joints at the body's ends. Joint 0 is arm 1 (at body -x, axis
+-z) and joint 1 is arm 2 (at +x, axis +z), so each joint position *is* the gait's alpha_i. Arms hang
+``arm_clearance`` above the plate and their collisions with the plate are filtered out.
+
+Per-tick Python work is kept small: motor commands are sent only when a target or speed changes, a
+gait core is asked for a new command only at its quarter boundaries (or after a halt or start), state
+is read with one pass of batched calls and cached until the next step, and FSR forces and contacts are
+computed only when asked for.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+import pybullet
+from pybullet_utils.bullet_client import BulletClient
+from smarticle_driver.gait import GaitConfig, SquareGait
+from smarticle_driver.topics import FSR_FACES
+
+from .settings import SimConfig
+from .errors import SceneError, SimError
+from .scenes import Scene
+from .trouble import check_penetration, check_state
+
+#: Joint index of arm 1 and arm 2 (also their link indices); the body is link -1.
+ARM_JOINTS: tuple[int, int] = (0, 1)
+#: A gait quarter boundary this close (s) after a tick's time is taken at that tick.
+_TIME_EPS = 1e-9
+
+
+@dataclass(frozen=True)
+class WorldState:
+    """Ground truth of all robots at one instant (arrays indexed by robot id)."""
+
+    time: float
+    poses: np.ndarray           # (N, 3): x (m), y (m), heading of the body normal (rad, [-pi, pi))
+    positions: np.ndarray       # (N, 3): body centre x, y, z (m)
+    tilt: np.ndarray            # (N,): angle between the body z axis and the vertical (rad)
+    speed: np.ndarray           # (N,): body centre speed (m/s)
+    arm_angles: np.ndarray      # (N, 2): alpha1, alpha2 (rad)
+    arm_velocities: np.ndarray  # (N, 2): d alpha / dt (rad/s)
+
+
+class World:
+    """N smarticles on a plate in their own PyBullet client; step it, command it, read ground truth."""
+
+    def __init__(self, config: SimConfig, scene: Scene) -> None:
+        scene.validate(config.robot, config.physics.plate_size)
+        self.config = config
+        self.scene = scene
+        self._physics = config.physics
+        self._steps_per_tick = config.physics.steps_per_tick
+        self._client = _quiet_client()
+        self._step_count = 0
+        self._tick_count = 0
+        self._state: WorldState | None = None
+        self._last_check: tuple[float, np.ndarray | None] = (0.0, None)
+        n = len(scene.robots)
+        self._gaits: list[SquareGait | None] = [
+            SquareGait(r.gait) if r.gait is not None else None for r in scene.robots]
+        self._next_gait_update = np.full(n, math.inf)
+        self._commands: list[list[tuple[float, float] | None]] = [[None, None] for _ in range(n)]
+        self._build()
+
+    # ----------------------------------------------------------------- construction
+    def _build(self) -> None:
+        """Create the plate and the robots and set the engine parameters once."""
+        c, ph, spec = self._client, self._physics, self.config.robot
+        c.setPhysicsEngineParameter(fixedTimeStep=ph.time_step, numSolverIterations=ph.solver_iterations,
+                                    numSubSteps=0, deterministicOverlappingPairs=1,
+                                    contactBreakingThreshold=ph.contact_breaking_threshold)
+        c.setGravity(0.0, 0.0, -ph.gravity)
+        link_friction = math.sqrt(ph.friction_robot_robot)   # Bullet multiplies the two bodies' values
+        plate_friction = ph.friction_body_plate / link_friction if link_friction > 0 else 0.0
+        restitution = math.sqrt(ph.restitution)
+        half = ph.plate_size / 2.0
+        plate_shape = c.createCollisionShape(pybullet.GEOM_BOX,
+                                             halfExtents=[half, half, ph.plate_thickness / 2.0])
+        plate_visual = c.createVisualShape(pybullet.GEOM_BOX,
+                                           halfExtents=[half, half, ph.plate_thickness / 2.0],
+                                           rgbaColor=[0.75, 0.75, 0.78, 1.0])
+        self.plate_id = c.createMultiBody(0.0, plate_shape, plate_visual,
+                                          basePosition=[0.0, 0.0, -ph.plate_thickness / 2.0])
+        c.changeDynamics(self.plate_id, -1, lateralFriction=min(plate_friction, 10.0),
+                         restitution=restitution, rollingFriction=0.0, spinningFriction=0.0)
+
+        w, d, h = spec.body_width, spec.body_depth, spec.body_height
+        half_l = spec.arm_length / 2.0
+        arm_half = [half_l, spec.arm_thickness / 2.0, spec.arm_height / 2.0]
+        body_shape = c.createCollisionShape(pybullet.GEOM_BOX, halfExtents=[w / 2, d / 2, h / 2])
+        body_visual = c.createVisualShape(pybullet.GEOM_BOX, halfExtents=[w / 2, d / 2, h / 2],
+                                          rgbaColor=[0.2, 0.3, 0.8, 1.0])
+        arm_shapes, arm_visuals = [], []
+        for sign in (-1.0, 1.0):
+            offset = [sign * half_l, 0.0, 0.0]
+            arm_shapes.append(c.createCollisionShape(pybullet.GEOM_BOX, halfExtents=arm_half,
+                                                     collisionFramePosition=offset))
+            arm_visuals.append(c.createVisualShape(pybullet.GEOM_BOX, halfExtents=arm_half,
+                                                   visualFramePosition=offset,
+                                                   rgbaColor=[0.9, 0.5, 0.1, 1.0]))
+        arm_z = spec.arm_clearance + spec.arm_height / 2.0 - h / 2.0   # arm centre relative to body centre
+        ident = [0.0, 0.0, 0.0, 1.0]
+        ids = []
+        for placement in self.scene.robots:
+            yaw = placement.heading - math.pi / 2.0
+            body = c.createMultiBody(
+                spec.body_mass, body_shape, body_visual, [placement.x, placement.y, h / 2.0],
+                c.getQuaternionFromEuler([0.0, 0.0, yaw]),
+                linkMasses=[spec.arm_mass, spec.arm_mass], linkCollisionShapeIndices=arm_shapes,
+                linkVisualShapeIndices=arm_visuals,
+                linkPositions=[[-w / 2, 0.0, arm_z], [w / 2, 0.0, arm_z]], linkOrientations=[ident, ident],
+                linkInertialFramePositions=[[-half_l, 0.0, 0.0], [half_l, 0.0, 0.0]],
+                linkInertialFrameOrientations=[ident, ident], linkParentIndices=[0, 0],
+                linkJointTypes=[pybullet.JOINT_REVOLUTE] * 2, linkJointAxis=[[0, 0, -1], [0, 0, 1]])
+            for link in (-1, *ARM_JOINTS):
+                c.changeDynamics(body, link, lateralFriction=link_friction, restitution=restitution,
+                                 rollingFriction=0.0, spinningFriction=0.0, linearDamping=0.0,
+                                 angularDamping=0.0, jointDamping=0.0,
+                                 activationState=pybullet.ACTIVATION_STATE_DISABLE_SLEEPING)
+            if not ph.arm_plate_collision:
+                for j in ARM_JOINTS:
+                    c.setCollisionFilterPair(body, self.plate_id, j, -1, 0)
+            c.resetJointState(body, ARM_JOINTS[0], placement.alpha1)
+            c.resetJointState(body, ARM_JOINTS[1], placement.alpha2)
+            ids.append(body)
+        self.body_ids: tuple[int, ...] = tuple(ids)
+        self._robot_of_body = {b: k for k, b in enumerate(ids)}
+        for k, placement in enumerate(self.scene.robots):
+            self._send(k, (placement.alpha1, placement.alpha2), spec.servo_speed)
+
+    # ----------------------------------------------------------------- properties
+    @property
+    def client(self) -> BulletClient:
+        """The world's own PyBullet client (for rendering or debugging; do not step it directly)."""
+        return self._client
+
+    @property
+    def n_robots(self) -> int:
+        """Number of robots."""
+        return len(self.body_ids)
+
+    @property
+    def time(self) -> float:
+        """Simulated time since the world was built (s)."""
+        return self._step_count * self._physics.time_step
+
+    @property
+    def step_count(self) -> int:
+        """Physics steps taken."""
+        return self._step_count
+
+    @property
+    def steps_per_tick(self) -> int:
+        """Physics steps per control tick."""
+        return self._steps_per_tick
+
+    def gait(self, robot: int) -> SquareGait | None:
+        """The gait core driving ``robot``, or None if it follows external joint commands."""
+        return self._gaits[self._check_robot(robot)]
+
+    # ----------------------------------------------------------------- commands
+    def set_gait(self, robot: int, gait: GaitConfig | None) -> None:
+        """Let ``robot`` run its own gait core (not started yet), or None to take external commands."""
+        k = self._check_robot(robot)
+        self._gaits[k] = SquareGait(gait) if gait is not None else None
+        self._next_gait_update[k] = math.inf
+
+    def start_gaits(self, t0: float | None = None, robots: Sequence[int] | None = None) -> None:
+        """Start the gait cores (all, or ``robots``) at sim time ``t0`` (default: now)."""
+        start = self.time if t0 is None else float(t0)
+        for k in self._robot_list(robots):
+            gait = self._gaits[k]
+            if gait is not None:
+                gait.start(start)
+                self._next_gait_update[k] = start
+
+    def halt(self, robot: int) -> bool:
+        """Halt ``robot``'s gait now (arms hold; resume at its next period); False if not running."""
+        k = self._check_robot(robot)
+        gait = self._gaits[k]
+        if gait is None or not gait.halt(self.time):
+            return False
+        self._hold_arms(k)
+        self._next_gait_update[k] = self.time
+        return True
+
+    def set_joint_command(self, robot: int, targets: tuple[float, float], speed: float | None = None) -> None:
+        """Command ``robot``'s servos: arm targets (rad) and speed limit (rad/s, capped at the servo's)."""
+        k = self._check_robot(robot)
+        if self._gaits[k] is not None:
+            raise SimError(f'robot {k} runs its own gait core; call set_gait({k}, None) before commanding it')
+        t1, t2 = float(targets[0]), float(targets[1])
+        spd = self.config.robot.servo_speed if speed is None else float(speed)
+        if not (math.isfinite(t1) and math.isfinite(t2)):
+            raise SimError(f'robot {k}: joint targets must be finite, got {targets!r}')
+        if not (math.isfinite(spd) and spd > 0.0):
+            raise SimError(f'robot {k}: speed limit must be > 0 rad/s, got {speed!r}')
+        self._send(k, (t1, t2), spd)
+
+    def _hold_arms(self, k: int) -> None:
+        """Command both arms of robot ``k`` to stay where they are now."""
+        js = self._client.getJointStates(self.body_ids[k], ARM_JOINTS)
+        self._send(k, (js[0][0], js[1][0]), self.config.robot.servo_speed)
+
+    def _send(self, k: int, targets: tuple[float, float], speed: float) -> None:
+        """Send servo commands of robot ``k``, only for joints whose target or speed changed."""
+        speed = min(speed, self.config.robot.servo_speed)
+        last = self._commands[k]
+        for j in ARM_JOINTS:
+            command = (targets[j], speed)
+            if last[j] == command:
+                continue
+            self._client.setJointMotorControl2(
+                self.body_ids[k], j, pybullet.POSITION_CONTROL, targetPosition=targets[j],
+                targetVelocity=0.0, force=self.config.robot.servo_torque, maxVelocity=speed,
+                positionGain=self._physics.position_gain, velocityGain=1.0)
+            last[j] = command
+
+    def _update_gaits(self) -> None:
+        """Ask the gait cores whose quarter has ended (or that were started or halted) for new targets."""
+        now = self.time
+        due = np.flatnonzero(self._next_gait_update <= now + _TIME_EPS)
+        for k in due:
+            gait = self._gaits[k]
+            if gait is None:
+                self._next_gait_update[k] = math.inf
+                continue
+            t = max(now, gait.start_time if gait.start_time is not None else now)
+            command = gait.command(t + _TIME_EPS)
+            self._send(int(k), command.targets, command.speed)
+            tau = gait.gait_time(t + _TIME_EPS)
+            next_tau = (math.floor(4.0 * tau) + 1) / 4.0
+            cfg = gait.config
+            self._next_gait_update[k] = gait.start_time + (next_tau - cfg.phase) * cfg.period  # type: ignore[operator]
+
+    # ----------------------------------------------------------------- stepping
+    def step(self, n: int = 1) -> None:
+        """Advance ``n`` physics steps (no gait update, no trouble check)."""
+        step = self._client.stepSimulation
+        for _ in range(n):
+            step()
+        self._step_count += n
+        self._state = None
+
+    def tick(self) -> None:
+        """One control tick: update gait commands, step the physics, check for trouble."""
+        self._update_gaits()
+        self.step(self._steps_per_tick)
+        self._tick_count += 1
+        if self._tick_count % self._physics.trouble_every == 0:
+            self.check_trouble()
+
+    def run(self, ticks: int) -> None:
+        """Run ``ticks`` control ticks."""
+        for _ in range(ticks):
+            self.tick()
+
+    def ticks_for(self, seconds: float) -> int:
+        """Number of control ticks in ``seconds`` of sim time (rounded)."""
+        return round(seconds / self._physics.control_tick)
+
+    # ----------------------------------------------------------------- ground truth
+    def state(self) -> WorldState:
+        """Ground truth of all robots now (read once per step, then cached)."""
+        if self._state is None:
+            self._state = self._read_state()
+        return self._state
+
+    def poses(self) -> np.ndarray:
+        """(N, 3) x, y (m) and heading of the body normal (rad) of every robot."""
+        return self.state().poses
+
+    def arm_angles(self) -> np.ndarray:
+        """(N, 2) arm angles alpha1, alpha2 (rad)."""
+        return self.state().arm_angles
+
+    def arm_velocities(self) -> np.ndarray:
+        """(N, 2) arm angular velocities (rad/s)."""
+        return self.state().arm_velocities
+
+    def _read_bases(self) -> tuple[np.ndarray, np.ndarray]:
+        """Body centre positions (N, 3) and orientation quaternions (N, 4, xyzw) of every robot."""
+        base_pose = self._client.getBasePositionAndOrientation
+        pos = np.empty((self.n_robots, 3))
+        quat = np.empty((self.n_robots, 4))
+        for k, body in enumerate(self.body_ids):
+            pos[k], quat[k] = base_pose(body)
+        return pos, quat
+
+    def _read_state(self) -> WorldState:
+        """Read every robot's base pose, velocity and joint states."""
+        c = self._client
+        n = self.n_robots
+        pos, quat = self._read_bases()
+        vel = np.empty((n, 3))
+        arms = np.empty((n, 2))
+        arm_vel = np.empty((n, 2))
+        base_vel, joints = c.getBaseVelocity, c.getJointStates
+        for k, body in enumerate(self.body_ids):
+            vel[k] = base_vel(body)[0]
+            (a1, v1, _, _), (a2, v2, _, _) = joints(body, ARM_JOINTS)
+            arms[k] = a1, a2
+            arm_vel[k] = v1, v2
+        heading, tilt = _heading_and_tilt(quat)
+        poses = np.column_stack([pos[:, 0], pos[:, 1], heading])
+        return WorldState(self.time, poses, pos, tilt, np.linalg.norm(vel, axis=1), arms, arm_vel)
+
+    # ----------------------------------------------------------------- contacts and FSR
+    def fsr(self, robots: Sequence[int] | None = None) -> np.ndarray:
+        """(len(robots), 4) normal force (N) on each FSR face, in the order of ``FSR_FACES``.
+
+        A contact on arm i counts toward face ``front`` (the face on the body-normal side at alpha = 0,
+        i.e. the arm link's +y side) when its force pushes the arm toward -y, else toward ``back``; only
+        the component of the contact force along the face normal counts.
+        """
+        ks = self._robot_list(robots)
+        out = np.zeros((len(ks), len(FSR_FACES)))
+        c = self._client
+        for row, k in enumerate(ks):
+            body = self.body_ids[k]
+            links = c.getLinkStates(body, ARM_JOINTS)
+            for j in ARM_JOINTS:
+                contacts = c.getContactPoints(bodyA=body, linkIndexA=j)
+                if not contacts:
+                    continue
+                qx, qy, qz, qw = links[j][1]
+                front = (2.0 * (qx * qy - qw * qz), 1.0 - 2.0 * (qx * qx + qz * qz),
+                         2.0 * (qy * qz + qw * qx))
+                for point in contacts:
+                    force = point[9]
+                    normal = point[7]   # on B, pointing from B toward this arm: the push direction
+                    along = force * (normal[0] * front[0] + normal[1] * front[1] + normal[2] * front[2])
+                    if along < 0.0:
+                        out[row, 2 * j] -= along        # pushed toward -front: contact on the front face
+                    else:
+                        out[row, 2 * j + 1] += along
+        return out
+
+    def robot_contacts(self) -> np.ndarray:
+        """(N, N) symmetric bool matrix: True where two robots touch now (any links)."""
+        n = self.n_robots
+        out = np.zeros((n, n), dtype=bool)
+        index = self._robot_of_body
+        for point in self._client.getContactPoints():
+            a, b = index.get(point[1]), index.get(point[2])
+            if a is not None and b is not None and a != b:
+                out[a, b] = out[b, a] = True
+        return out
+
+    def max_penetration(self) -> tuple[int, float]:
+        """(robot, depth in m) of the deepest contact overlap now; (-1, 0.0) without contacts."""
+        worst, robot = 0.0, -1
+        index = self._robot_of_body
+        for point in self._client.getContactPoints():
+            depth = -point[8]
+            if depth > worst or depth != depth:
+                worst = depth
+                robot = index.get(point[1], index.get(point[2], -1))
+                if depth != depth:
+                    break
+        return robot, worst
+
+    def check_trouble(self) -> None:
+        """Raise SimTrouble if a robot is not finite, off the plate, flipped, too fast or tunnelling.
+
+        Uses the cached state if there is one; otherwise reads only the body poses and takes the speed
+        as the mean over the interval since the previous check (cheap enough to run every few ticks).
+        """
+        now = self.time
+        if self._state is not None:
+            s = self._state
+            positions, tilt, speed, arms = s.positions, s.tilt, s.speed, s.arm_angles
+        else:
+            positions, quat = self._read_bases()
+            tilt = _heading_and_tilt(quat)[1]
+            last_time, last_positions = self._last_check
+            if last_positions is not None and now > last_time:
+                speed = np.linalg.norm(positions - last_positions, axis=1) / (now - last_time)
+            else:
+                speed = np.zeros(self.n_robots)
+            arms = np.zeros((self.n_robots, 2))
+        self._last_check = (now, positions)
+        check_state(now, positions, tilt, speed, arms, self._physics, self.config.robot.body_height)
+        robot, depth = self.max_penetration()
+        check_penetration(now, robot, depth, self._physics)
+
+    # ----------------------------------------------------------------- housekeeping
+    def _check_robot(self, robot: int) -> int:
+        """Return ``robot`` as an index or raise SceneError."""
+        if isinstance(robot, bool) or not isinstance(robot, (int, np.integer)) \
+                or not 0 <= robot < self.n_robots:
+            raise SceneError(f'unknown robot {robot!r}: this world has robots 0..{self.n_robots - 1}')
+        return int(robot)
+
+    def _robot_list(self, robots: Sequence[int] | None) -> list[int]:
+        """All robots, or the given ones checked."""
+        if robots is None:
+            return list(range(self.n_robots))
+        return [self._check_robot(k) for k in robots]
+
+    def close(self) -> None:
+        """Disconnect the PyBullet client (idempotent)."""
+        client = getattr(self, '_client', None)
+        if client is not None:
+            try:
+                client.disconnect()
+            except pybullet.error:
+                pass
+            self._client = None  # type: ignore[assignment]
+
+    def __enter__(self) -> World:
+        """Context manager: the world closes on exit."""
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        """Close the world."""
+        self.close()
+
+
+def _heading_and_tilt(quat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Heading of the body normal in [-pi, pi) and tilt from vertical (rad) from (N, 4) xyzw quaternions."""
+    qx, qy, qz, qw = quat.T
+    yaw = np.arctan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+    heading = (yaw + math.pi / 2.0 + math.pi) % (2.0 * math.pi) - math.pi
+    cos_tilt = np.clip(1.0 - 2.0 * (qx * qx + qy * qy), -1.0, 1.0)
+    return heading, np.arccos(cos_tilt)
+
+
+def _quiet_client() -> BulletClient:
+    """A DIRECT BulletClient, with the engine's start-up chatter on stdout ('argv[0]=') silenced."""
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):   # stdout replaced by a non-file (e.g. captured)
+        return BulletClient(connection_mode=pybullet.DIRECT)
+    sys.stdout.flush()
+    saved = os.dup(fd)
+    try:
+        with open(os.devnull, 'wb') as devnull:
+            os.dup2(devnull.fileno(), fd)
+            return BulletClient(connection_mode=pybullet.DIRECT)
+    finally:
+        os.dup2(saved, fd)
+        os.close(saved)

@@ -1,0 +1,240 @@
+"""servo_bridge, gait and smarticle-fake-board as real processes, over DDS and a real pty."""
+
+from __future__ import annotations
+
+import math
+import statistics
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from smarticle_driver import topics
+from smarticle_driver.calibration import load_fsr_calibration, load_servo_calibration
+from smarticle_driver.emulator import MaestroEmulator, TargetRecord
+from smarticle_driver.gait import CORNER_SIGNS
+from tests.conftest import spin_until
+from tests.smarticle_driver.fake_board_helpers import open_board, running_emulator, wait_until
+
+ROOT = Path(__file__).resolve().parents[2]
+CONFIG = ROOT / 'smarticle_driver' / 'config'
+#: Angle tolerance of the gait trace: the Maestro's quarter-microsecond steps are 0.024 degrees here.
+TRACE_TOLERANCE_DEG = 0.1
+
+
+@pytest.fixture
+def emulator(tmp_path: Path) -> Iterator[MaestroEmulator]:
+    with running_emulator(tmp_path / 'maestro') as emu:
+        yield emu
+
+
+def bridge_args(emulator: MaestroEmulator, *extra: str) -> list[str]:
+    """Command line of a servo_bridge on the emulator's port."""
+    args = ['--ros-args', '-p', f'port:={emulator.link_path}', '-p', 'reconnect_max:=0.2']
+    for item in extra:
+        args += ['-p', item]
+    return args
+
+
+def subscribe(node: Any, key: str, qos: topics.Qos | None = None) -> list[Any]:
+    """Subscribe ``node`` to contract topic ``key`` of robot 0 and return the list messages land in."""
+    spec = topics.spec_of(key)
+    got: list[Any] = []
+    node.create_subscription(topics.message_class(spec.type), spec.resolve(0 if spec.per_robot else None),
+                             got.append, topics.qos_profile(qos or spec.qos))
+    return got
+
+
+def statuses(diagnostics: list[Any]) -> list[tuple[int, str, dict[str, str]]]:
+    """Flatten DiagnosticArray messages of the bridge into (level, message, values)."""
+    return [(s.level[0] if isinstance(s.level, bytes) else s.level, s.message,
+             {kv.key: kv.value for kv in s.values})
+            for array in diagnostics for s in array.status if s.name.endswith('servo_bridge')]
+
+
+@pytest.mark.integration
+def test_fsr_voltages_on_the_board_arrive_as_newtons(nodes: Any, ros_node: Any,
+                                                     emulator: MaestroEmulator) -> None:
+    volts = (0.5, 1.5, 3.0, 4.5)
+    for channel, v in zip((2, 3, 4, 5), volts, strict=True):
+        emulator.set_voltage(channel, v)
+    proc = nodes.start('servo_bridge', *bridge_args(emulator))
+    node = ros_node('fsr_probe')
+    got = subscribe(node, 'fsr')
+    assert spin_until(node, lambda: len(got) >= 60, 20.0), nodes.output(proc)
+    fsrs = load_fsr_calibration(CONFIG / 'fsr_calibration.yaml')
+    expected = [fsrs[face].newtons(round(v / 5.0 * 1023))
+                for face, v in zip(topics.FSR_FACES, volts, strict=True)]
+    msg = got[-1]
+    assert list(msg.name) == list(topics.FSR_FACES)
+    assert list(msg.effort) == pytest.approx(expected, rel=1e-9)
+    assert 0.0 < expected[0] < expected[1] < expected[2] < expected[3]
+    stamps = [m.header.stamp.sec + m.header.stamp.nanosec * 1e-9 for m in got[-50:]]
+    assert (len(stamps) - 1) / (stamps[-1] - stamps[0]) > 90.0, 'FSR samples must come at >= 100 Hz'
+    emulator.set_voltage(2, 0.0)
+    assert spin_until(node, lambda: got[-1].effort[0] == 0.0, 5.0)
+
+
+@pytest.mark.integration
+def test_the_bridge_survives_the_port_vanishing_and_resumes(nodes: Any, ros_node: Any,
+                                                            emulator: MaestroEmulator) -> None:
+    from sensor_msgs.msg import JointState
+
+    proc = nodes.start('servo_bridge',
+                       *bridge_args(emulator, 'watchdog_timeout:=30.0', 'diagnostics_period:=0.2'))
+    node = ros_node('replug_probe')
+    fsr = subscribe(node, 'fsr')
+    diagnostics = subscribe(node, 'diagnostics')
+    commands = node.create_publisher(JointState, topics.topic('joint_commands', 0),
+                                     topics.qos_profile(topics.Qos.COMMAND))
+    command = JointState(name=list(topics.JOINT_NAMES), position=[0.3, -0.3], velocity=[5.0, 5.0])
+
+    def command_arrived() -> bool:
+        commands.publish(command)
+        return len(emulator.targets()) >= 2
+
+    assert spin_until(node, command_arrived, 20.0), nodes.output(proc)
+    assert spin_until(node, lambda: len(fsr) >= 10, 5.0)
+    emulator.unplug()
+    spin_until(node, lambda: False, 0.6)
+    gap_start = len(fsr)
+    spin_until(node, lambda: False, 0.3)
+    assert len(fsr) - gap_start <= 1, 'no FSR samples while the board is unplugged'
+    assert proc.poll() is None, nodes.output(proc)
+    assert spin_until(node, lambda: any(level == 2 for level, _, _ in statuses(diagnostics)), 3.0)
+    emulator.clear_targets()
+    emulator.replug()
+    assert spin_until(node, lambda: len(fsr) >= gap_start + 20, 10.0), nodes.output(proc)
+    resent = sorted((r.channel, r.pulse_us) for r in emulator.targets())
+    assert resent == [(0, 1680.0), (1, 1680.0)], 'the power-cycled board gets its targets again'
+    assert spin_until(node, lambda: any(level == 0 and int(values['port_disconnects']) >= 1
+                                        for level, _, values in statuses(diagnostics)), 3.0)
+    log = nodes.output(proc)
+    assert 'lost' in log and log.count('opened') >= 2 and proc.poll() is None
+
+
+@pytest.mark.integration
+def test_bad_joint_commands_are_reported_and_survived(nodes: Any, ros_node: Any,
+                                                      emulator: MaestroEmulator) -> None:
+    from sensor_msgs.msg import JointState
+
+    proc = nodes.start('servo_bridge', *bridge_args(emulator, 'diagnostics_period:=0.2'))
+    node = ros_node('bad_command_probe')
+    states = subscribe(node, 'joint_states')
+    diagnostics = subscribe(node, 'diagnostics')
+    commands = node.create_publisher(JointState, topics.topic('joint_commands', 0),
+                                     topics.qos_profile(topics.Qos.COMMAND))
+    bad = [JointState(name=['arm1', 'arm2'], position=[math.nan, math.inf]),
+           JointState(name=['arm1', 'arm2'], position=[0.1]),
+           JointState(name=['elbow'], position=[0.1]),
+           JointState(name=['arm1', 'arm2'], position=[3.0, -0.2], velocity=[-1.0, 2.0])]
+
+    def counted() -> bool:
+        for msg in bad:
+            commands.publish(msg)
+        return any(int(v['nonfinite_targets']) > 0 and int(v['rejected_commands']) > 0 and
+                   int(v['unknown_joints']) > 0 and int(v['clamped_targets']) > 0 and int(v['bad_speeds']) > 0
+                   for _, _, v in statuses(diagnostics))
+
+    assert spin_until(node, counted, 20.0), nodes.output(proc)
+    assert spin_until(node, lambda: bool(states), 5.0)
+    arm1, arm2 = states[-1].position
+    assert arm1 == pytest.approx(1000 / 600, abs=1e-3) and arm2 == pytest.approx(-0.2, abs=1e-3)  # clamped
+    assert proc.poll() is None
+    log = nodes.output(proc)
+    assert 'not finite' in log and "unknown joint 'elbow'" in log and 'clamped' in log
+
+
+def corner_trace(records: list[TargetRecord], alpha_deg: float) -> list[tuple[float, int]]:
+    """Turn Set Target records into (time, corner index) each time the commanded pair changes."""
+    servos = load_servo_calibration(CONFIG / 'servo_calibration.yaml')
+    angles: dict[int, float] = {}
+    trace: list[tuple[float, int]] = []
+    for record in records:
+        joint = topics.JOINT_NAMES[record.channel]
+        angles[record.channel] = math.degrees(servos[joint].pulse_to_angle(record.pulse_us))
+        if len(angles) < 2:
+            continue
+        pair = (angles[0], angles[1])
+        matches = [i for i, (s1, s2) in enumerate(CORNER_SIGNS)
+                   if abs(pair[0] - s1 * alpha_deg) <= TRACE_TOLERANCE_DEG
+                   and abs(pair[1] - s2 * alpha_deg) <= TRACE_TOLERANCE_DEG]
+        assert matches, f'commanded pair {pair} deg at t={record.time:.3f} is not a gait corner'
+        if not trace or trace[-1][1] != matches[0]:
+            trace.append((record.time, matches[0]))
+    return trace
+
+
+@pytest.mark.integration
+def test_gait_and_bridge_drive_the_emulated_board_through_the_square_gait(
+        nodes: Any, ros_node: Any, emulator: MaestroEmulator) -> None:
+    alpha_deg, period = 60.0, 1.6
+    bridge = nodes.start('servo_bridge', *bridge_args(emulator))
+    node = ros_node('gait_trace_probe')
+    states = subscribe(node, 'joint_states')
+    assert spin_until(node, lambda: bridge.poll() is None and 'opened' in nodes.output(bridge), 10.0)
+    gait = nodes.start('gait', '--ros-args', '-p', 'autostart:=true', '-p', f'alpha_max_deg:={alpha_deg}',
+                       '-p', f'period:={period}')
+    assert spin_until(node, lambda: len(corner_trace(emulator.targets(), alpha_deg)) >= 7, 25.0), (
+        nodes.output(gait) + nodes.output(bridge))
+    trace = corner_trace(emulator.targets(), alpha_deg)
+    corners = [c for _, c in trace]
+    assert all((b - a) % 4 == 1 for a, b in zip(corners, corners[1:], strict=False)), (
+        f'corners must follow c0 -> c1 -> c2 -> c3 -> c0 (gait.py), got {corners}')
+    steps = [t1 - t0 for (t0, _), (t1, _) in zip(trace[1:], trace[2:], strict=False)]
+    assert statistics.median(steps) == pytest.approx(period / 4, abs=0.05), steps
+    spin_until(node, lambda: False, 0.3)
+    reached = [abs(math.degrees(a)) for msg in states for a in msg.position]
+    assert max(reached) == pytest.approx(alpha_deg, abs=TRACE_TOLERANCE_DEG)
+
+
+@pytest.mark.integration
+@pytest.mark.parametrize('which, text, field', [
+    ('servo_calibration_file', 'servos:\n  arm1: {center_us: 1500}\n', 'servos.arm2'),
+    ('fsr_calibration_file', 'sensors:\n  arm1_front: {vcc: -5}\n', 'sensors.arm1_front'),
+])
+def test_an_invalid_calibration_file_stops_start_up_naming_file_and_field(
+        nodes: Any, tmp_path: Path, which: str, text: str, field: str) -> None:
+    bad = tmp_path / 'bad_calibration.yaml'
+    bad.write_text(text)
+    proc = nodes.start('servo_bridge', '--ros-args', '-p', f'port:={tmp_path / "none"}',
+                       '-p', f'{which}:={bad}')
+    assert proc.wait(timeout=20) == 2
+    log = nodes.output(proc)
+    assert str(bad) in log and field in log and 'expected' in log, log
+
+
+@pytest.mark.integration
+def test_an_out_of_range_parameter_stops_start_up(nodes: Any, tmp_path: Path) -> None:
+    proc = nodes.start('servo_bridge', '--ros-args', '-p', f'port:={tmp_path / "none"}',
+                       '-p', 'fsr_rate_hz:=50.0')
+    assert proc.wait(timeout=20) == 2
+    assert "'fsr_rate_hz': 50.0 is below the minimum 100.0" in nodes.output(proc)
+
+
+def test_fake_board_cli_prints_its_port_and_obeys_the_control_file(nodes: Any, tmp_path: Path) -> None:
+    port, control, record = tmp_path / 'fake', tmp_path / 'ctl', tmp_path / 'targets.csv'
+    control.write_text('')
+    proc = nodes.start('smarticle-fake-board', '--port', str(port), '--control', str(control), '--record',
+                       str(record), '--no-stdin', '--log-period', '0.2', '--volts', '0', '1', '0', '0')
+    assert wait_until(lambda: f'emulator on {port}' in nodes.output(proc), 10.0), nodes.output(proc)
+    link, board = open_board(port)
+    assert board.read_analog((2, 3)) == [0, 205]
+    with control.open('a') as handle:
+        handle.write('newtons arm1_front 5\nvolts 4 2.5\nbogus\n')
+    assert wait_until(lambda: 'bogus' in nodes.output(proc), 5.0)
+    counts = board.read_analog((2, 4))
+    assert counts[1] == 512 and 4.9 < load_fsr_calibration(CONFIG / 'fsr_calibration.yaml')[
+        'arm1_front'].newtons(counts[0]) < 5.1
+    board.set_target(0, 2100.0)
+    assert wait_until(lambda: 'arm1  +57.3 deg' in nodes.output(proc), 5.0), nodes.output(proc)   # 1 rad
+    assert wait_until(lambda: record.exists() and ',0,2100.00,57.296' in record.read_text(), 5.0)
+    with control.open('a') as handle:
+        handle.write('unplug\n')
+    assert wait_until(lambda: not port.exists(), 5.0)
+    link.close()
+    with control.open('a') as handle:
+        handle.write('quit\n')
+    assert proc.wait(timeout=5) == 0
+    assert "error: cannot understand 'bogus'" in nodes.output(proc)

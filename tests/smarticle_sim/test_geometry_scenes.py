@@ -1,0 +1,86 @@
+"""Footprints, overlap tests, pair coordinates and the seeded scene builders."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from smarticle_driver.gait import GaitConfig
+
+from smarticle_sim.errors import SceneError
+from smarticle_sim.geometry import (PairCoordinates, Rect, pair_coordinates, place_pair, rect_corners,
+                                    rects_overlap, robot_rects)
+from smarticle_sim.scenes import RobotPlacement, Scene, dense_scene, pair_scene, random_scene
+from smarticle_sim.settings import SMALL
+
+
+def test_rect_overlap_separating_axis() -> None:
+    a = Rect(0.0, 0.0, 1.0, 0.1, 0.0)
+    assert rects_overlap(a, Rect(0.5, 0.0, 1.0, 0.1, math.pi / 2))
+    assert not rects_overlap(a, Rect(0.0, 0.3, 1.0, 0.1, 0.0))
+    assert rects_overlap(a, Rect(0.0, 0.3, 1.0, 0.1, 0.0), gap=0.2)
+    # diamond near a corner: the axis-aligned boxes overlap but the rectangles do not
+    assert not rects_overlap(Rect(0, 0, 1, 1, 0), Rect(1.75, 1.75, 0.5, 0.5, math.pi / 4))
+
+
+def test_arm_tips_follow_the_gait_convention() -> None:
+    """alpha > 0 turns both arm tips toward the body normal (+y at heading pi/2)."""
+    body, arm1, arm2 = robot_rects(SMALL, 0.0, 0.0, math.pi / 2, math.pi / 2, math.pi / 2)
+    assert body.hx == pytest.approx(SMALL.body_width / 2)
+    for arm, x_joint in ((arm1, -SMALL.body_width / 2), (arm2, SMALL.body_width / 2)):
+        assert arm.cx == pytest.approx(x_joint)
+        assert arm.cy == pytest.approx(SMALL.arm_length / 2)
+    _, arm1, arm2 = robot_rects(SMALL, 0.0, 0.0, math.pi / 2, 0.0, 0.0)
+    assert arm1.cx == pytest.approx(-(SMALL.body_width + SMALL.arm_length) / 2)
+    assert rect_corners(arm2)[:, 0].max() == pytest.approx(SMALL.body_width / 2 + SMALL.arm_length)
+
+
+def test_pair_coordinates_round_trip() -> None:
+    pose1 = (0.1, -0.05, 0.7)
+    coords = PairCoordinates(1.3, math.radians(60), math.radians(200))
+    pose2 = place_pair(pose1, coords, 0.054)
+    back = pair_coordinates(pose1, pose2, 0.054)
+    assert np.allclose(back, coords)
+    # theta = 0 is along robot 1's body x axis (its arm-2 side), 90 deg straight ahead along its normal
+    side = place_pair((0.0, 0.0, math.pi / 2), PairCoordinates(1.0, 0.0, 0.0), 1.0)
+    ahead = place_pair((0.0, 0.0, math.pi / 2), PairCoordinates(1.0, math.pi / 2, 0.0), 1.0)
+    assert np.allclose(side[:2], (1.0, 0.0)) and np.allclose(ahead[:2], (0.0, 1.0))
+
+
+def test_dense_scene_is_seeded_packed_and_in_phase(gait90: GaitConfig) -> None:
+    a = dense_scene(SMALL, gait90, 7, seed=3)
+    assert a == dense_scene(SMALL, gait90, 7, seed=3)
+    assert a != dense_scene(SMALL, gait90, 7, seed=4)
+    a.validate(SMALL, 0.6)
+    assert {r.gait for r in a.robots} == {gait90}
+    centres = np.array([(r.x, r.y) for r in a.robots])
+    assert np.linalg.norm(centres, axis=1).max() < 3 * SMALL.body_length   # compressed
+
+
+def test_pair_scene_places_robot_two(gait90: GaitConfig) -> None:
+    scene = pair_scene(SMALL, gait90, 1.6, math.radians(270), math.radians(180), phases=(0.0, 0.25))
+    r1, r2 = scene.robots
+    coords = pair_coordinates((r1.x, r1.y, r1.heading), (r2.x, r2.y, r2.heading), SMALL.body_length)
+    assert np.allclose(coords, (1.6, math.radians(270), math.pi))
+    assert (r1.gait.phase, r2.gait.phase) == (0.0, 0.25)   # type: ignore[union-attr]
+    assert (r2.alpha1, r2.alpha2) == pytest.approx((-math.pi / 2, math.pi / 2))   # phase 0.25 starts at c1
+
+
+def test_overlapping_placements_refused(gait90: GaitConfig) -> None:
+    with pytest.raises(SceneError, match='overlap'):
+        pair_scene(SMALL, gait90, 1.3, math.pi / 2, math.pi)   # antiparallel U shapes facing each other
+    scene = Scene((RobotPlacement(0.0, 0.0, 0.0), RobotPlacement(0.02, 0.0, 1.0)))
+    with pytest.raises(SceneError, match='robots 0 .* and 1 .* overlap'):
+        scene.validate(SMALL, 0.6)
+    with pytest.raises(SceneError, match='off the 0.6 m plate'):
+        Scene((RobotPlacement(0.29, 0.0, 0.0),)).validate(SMALL, 0.6)
+
+
+def test_random_scene_non_overlapping_and_seeded(gait90: GaitConfig) -> None:
+    scene = random_scene(SMALL, gait90, 10, seed=5, random_phases=True)
+    scene.validate(SMALL, 0.6)
+    assert scene == random_scene(SMALL, gait90, 10, seed=5, random_phases=True)
+    assert len({r.gait.phase for r in scene.robots}) == 10   # type: ignore[union-attr]
+    with pytest.raises(SceneError, match='could not place'):
+        random_scene(SMALL, gait90, 30, seed=1, region=0.15, max_tries=300)
