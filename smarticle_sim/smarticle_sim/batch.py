@@ -4,7 +4,11 @@ The npz format (``docs/sim_core.md``): S samples, N robots, arrays
 
 * ``time`` (S,) s; ``poses`` (S, N, 3) x (m), y (m), heading of the body normal (rad);
 * ``arm_angles`` (S, N, 2) rad; ``fsr`` (S, N, 4) N, faces in ``fsr_faces`` order (zeros if not recorded);
-* ``contacts`` (S, N, N) bool, robot-robot contact at the sample;
+* ``contacts`` (S, N, N) bool, robot-robot contact at the sample (False if not recorded);
+
+Samples are taken at ``DEFAULT_SAMPLE_RATE`` (20 Hz) unless asked otherwise; FSR and contacts are
+recorded only when asked (``record_fsr``, ``record_contacts``), so a default run costs little more than
+stepping (poses: two PyBullet calls per robot per sample, written into preallocated arrays).
 * ``body_length`` () m; ``meta`` () JSON string of the settings, scene and outcome.
 """
 
@@ -22,7 +26,7 @@ from smarticle_driver.topics import FSR_FACES
 from .errors import SimError, SimTrouble
 from .scenes import Scene
 from .settings import SimConfig
-from .world import World
+from .world import ARM_JOINTS, World, _heading_and_tilt
 
 
 @dataclass
@@ -52,64 +56,114 @@ def scene_period(scene: Scene) -> float:
     return periods.pop()
 
 
-def run_trial(config: SimConfig, scene: Scene, periods: float, sample_every: int = 1,
-              record_fsr: bool = True, record_contacts: bool = True, progress: bool = False) -> Recording:
+#: Default recording rate (Hz): 32 samples per 1.6 s gait period, plenty for poses and pair coordinates.
+DEFAULT_SAMPLE_RATE = 20.0
+
+
+def default_sample_every(config: SimConfig, rate: float = DEFAULT_SAMPLE_RATE) -> int:
+    """Control ticks between samples for about ``rate`` samples per second (at least 1)."""
+    return max(1, round(1.0 / (rate * config.physics.control_tick)))
+
+
+class _PoseReader:
+    """Reads body poses and arm angles of every robot into preallocated arrays (2 calls per robot)."""
+
+    def __init__(self, world: World) -> None:
+        self._pose = world.client.getBasePositionAndOrientation
+        self._joints = world.client.getJointStates
+        self._bodies = world.body_ids
+        n = len(self._bodies)
+        self._xy = np.empty((n, 2))
+        self._quat = np.empty((n, 4))
+        self._arms = np.empty((n, 2))
+
+    def read(self, poses: np.ndarray, arms: np.ndarray) -> None:
+        """Write (N, 3) x, y, heading into ``poses`` and (N, 2) arm angles into ``arms``."""
+        xy, quat, angles = self._xy, self._quat, self._arms
+        pose, joints = self._pose, self._joints
+        for k, body in enumerate(self._bodies):
+            pos, quat[k] = pose(body)
+            xy[k] = pos[0], pos[1]
+            (a1, _, _, _), (a2, _, _, _) = joints(body, ARM_JOINTS)
+            angles[k] = a1, a2
+        poses[:, :2] = xy
+        poses[:, 2] = _heading_and_tilt(quat)[0]
+        arms[...] = angles
+
+
+def run_trial(config: SimConfig, scene: Scene, periods: float, sample_every: int | None = None,
+              record_fsr: bool = False, record_contacts: bool = False,
+              progress: bool = False) -> Recording:
     """Run ``scene`` for ``periods`` gait periods from a synchronised start at t = 0 and record it.
 
-    Samples are taken every ``sample_every`` control ticks (the first at t = 0). A SimTrouble ends the
-    trial early: the recording keeps every sample taken so far and ``meta['trouble']`` says why.
+    Samples are taken every ``sample_every`` control ticks (the first at t = 0); the default is about
+    ``DEFAULT_SAMPLE_RATE`` (20 Hz: every 3 ticks at the default 60 Hz control tick). Poses and arm
+    angles are always recorded; FSR forces and robot-robot contacts only when asked (otherwise their
+    arrays are zeros / False). A SimTrouble ends the trial early: the recording keeps every sample
+    taken so far and ``meta['trouble']`` says why.
     """
     if not (math.isfinite(periods) and periods > 0):
         raise SimError(f'periods must be > 0, got {periods!r}')
-    if sample_every < 1:
-        raise SimError(f'sample_every must be >= 1 tick, got {sample_every}')
+    if sample_every is None:
+        sample_every = default_sample_every(config)
+    if isinstance(sample_every, bool) or not isinstance(sample_every, (int, np.integer)) or sample_every < 1:
+        raise SimError(f'sample_every must be an integer >= 1 tick, got {sample_every!r}')
+    sample_every = int(sample_every)
     period = scene_period(scene)
     n = len(scene.robots)
+    n_faces = len(FSR_FACES)
     meta: dict[str, Any] = {
         'robot': asdict(config.robot), 'physics': asdict(config.physics), 'scene': scene.name,
         'seed': scene.seed, 'periods': periods, 'period': period, 'sample_every': sample_every,
-        'fsr_recorded': record_fsr, 'fsr_faces': list(FSR_FACES), 'trouble': '',
+        'sample_rate': 1.0 / (sample_every * config.physics.control_tick),
+        'fsr_recorded': record_fsr, 'contacts_recorded': record_contacts,
+        'fsr_faces': list(FSR_FACES), 'trouble': '',
         'initial': [{'x': r.x, 'y': r.y, 'heading': r.heading, 'alpha1': r.alpha1, 'alpha2': r.alpha2,
                      'phase': r.gait.phase if r.gait else None,
                      'alpha_max': r.gait.alpha_max if r.gait else None} for r in scene.robots],
     }
-    times: list[float] = []
-    poses: list[np.ndarray] = []
-    arms: list[np.ndarray] = []
-    fsrs: list[np.ndarray] = []
-    touching: list[np.ndarray] = []
-    zero_fsr = np.zeros((n, len(FSR_FACES)))
-    zero_contacts = np.zeros((n, n), dtype=bool)
     with World(config, scene) as world:
         ticks = world.ticks_for(periods * period)
         ticks_per_period = max(1, world.ticks_for(period))
+        capacity = ticks // sample_every + 1
+        times = np.empty(capacity)
+        poses = np.empty((capacity, n, 3))
+        arms = np.empty((capacity, n, 2))
+        fsrs = np.zeros((capacity if record_fsr else 0, n, n_faces))
+        touching = np.zeros((capacity if record_contacts else 0, n, n), dtype=bool)
+        reader = _PoseReader(world)
         bar = _progress_bar(ticks, progress)
+        taken = 0
 
         def sample() -> None:
-            state = world.state()
-            times.append(state.time)
-            poses.append(state.poses)
-            arms.append(state.arm_angles)
-            fsrs.append(world.fsr() if record_fsr else zero_fsr)
-            touching.append(world.robot_contacts() if record_contacts else zero_contacts)
+            nonlocal taken
+            times[taken] = world.time
+            reader.read(poses[taken], arms[taken])
+            if record_fsr:
+                fsrs[taken] = world.fsr()
+            if record_contacts:
+                touching[taken] = world.robot_contacts()
+            taken += 1
 
         world.start_gaits(0.0)
+        tick = world.tick
         try:
             sample()
-            for tick in range(1, ticks + 1):
-                world.tick()
-                if tick % sample_every == 0:
+            for i in range(1, ticks + 1):
+                tick()
+                if i % sample_every == 0:
                     sample()
-                if bar is not None and tick % ticks_per_period == 0:
+                if bar is not None and i % ticks_per_period == 0:
                     bar.update(ticks_per_period)
         except SimTrouble as trouble:
             meta['trouble'] = str(trouble)
         finally:
             if bar is not None:
                 bar.close()
-    return Recording(np.array(times), np.array(poses).reshape(-1, n, 3), np.array(arms).reshape(-1, n, 2),
-                     np.array(fsrs).reshape(-1, n, len(FSR_FACES)), np.array(touching).reshape(-1, n, n),
-                     config.robot.body_length, meta)
+    fsr_out = fsrs[:taken] if record_fsr else np.zeros((taken, n, n_faces))
+    contacts_out = touching[:taken] if record_contacts else np.zeros((taken, n, n), dtype=bool)
+    return Recording(times[:taken].copy(), poses[:taken].copy(), arms[:taken].copy(), fsr_out.copy(),
+                     contacts_out.copy(), config.robot.body_length, meta)
 
 
 def _progress_bar(total: int, enabled: bool) -> Any:

@@ -48,8 +48,11 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument('--random-phases', action='store_true', help='random: seeded random gait phases')
     run.add_argument('--out', type=Path, default=Path('run.npz'), help='npz output file')
     run.add_argument('--png', type=Path, default=None, help='trajectory PNG (default: next to --out)')
-    run.add_argument('--sample-every', type=int, default=1, help='record every n control ticks')
-    run.add_argument('--no-fsr', action='store_true', help='do not record FSR forces and contacts')
+    run.add_argument('--sample-every', type=int, default=None,
+                     help='record every n control ticks (default: about 20 Hz, every 3 ticks at 60 Hz)')
+    run.add_argument('--fsr', action='store_true', help='also record FSR forces and robot-robot contacts')
+    run.add_argument('--no-fsr', action='store_true',
+                     help='do not record FSR forces and contacts (the default; overrides --fsr)')
     run.add_argument('--no-progress', action='store_true', help='no progress bar')
     bench.add_argument('--repeats', type=int, default=3)
     return parser
@@ -88,7 +91,8 @@ def main(argv: list[str] | None = None) -> int:
             print(format_table(rows))
             return 0
         rec = run_trial(config, scene, args.periods, sample_every=args.sample_every,
-                        record_fsr=not args.no_fsr, record_contacts=not args.no_fsr,
+                        record_fsr=args.fsr and not args.no_fsr,
+                        record_contacts=args.fsr and not args.no_fsr,
                         progress=not args.no_progress)
     except (SimError, GaitError) as error:
         print(f'smarticle-sim: error: {error}', file=sys.stderr)

@@ -25,7 +25,7 @@ def test_cli_dense_run_writes_npz_and_png(tmp_path: Path) -> None:
     assert png.read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
     with np.load(out) as data:
         samples = data['time'].shape[0]
-        assert samples == 2 * 96 + 1                     # 60 Hz ticks over 3.2 s, plus t = 0
+        assert samples == 2 * 32 + 1                     # 20 Hz (default) over 3.2 s, plus t = 0
         assert data['poses'].shape == (samples, 7, 3)
         assert data['arm_angles'].shape == (samples, 7, 2)
         assert data['fsr'].shape == (samples, 7, 4)
