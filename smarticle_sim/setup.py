@@ -26,6 +26,7 @@ setup(
     entry_points={
         'console_scripts': [
             'smarticle-sim = smarticle_sim.cli:main',
+            'sim_bridge = smarticle_sim.sim_bridge_node:main',
         ],
     },
 )

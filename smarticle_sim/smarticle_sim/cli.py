@@ -17,7 +17,7 @@ from smarticle_driver.gait import GaitConfig, GaitError
 from .batch import plot_trajectories, run_trial, save_npz
 from .benchmark import benchmark, format_table
 from .errors import SimError
-from .scenes import Scene, dense_scene, pair_scene, random_scene
+from .scenes import Scene, build_scene
 from .settings import PRESETS, SimConfig
 
 
@@ -69,13 +69,9 @@ def config_from_args(args: argparse.Namespace) -> SimConfig:
 def scene_from_args(args: argparse.Namespace, config: SimConfig) -> Scene:
     """Build the scene named by the command-line options."""
     gait = GaitConfig.from_degrees(args.alpha_max, period=args.period, servo_speed=config.robot.servo_speed)
-    if args.scene == 'dense':
-        return dense_scene(config.robot, gait, args.robots, seed=args.seed)
-    if args.scene == 'random':
-        return random_scene(config.robot, gait, args.robots, seed=args.seed,
-                            random_phases=args.random_phases)
-    return pair_scene(config.robot, gait, args.r, math.radians(args.theta), math.radians(args.phi),
-                      phases=(args.phase[0], args.phase[1]))
+    return build_scene(args.scene, config.robot, gait, args.robots, seed=args.seed, r=args.r,
+                       theta=math.radians(args.theta), phi=math.radians(args.phi),
+                       phases=(args.phase[0], args.phase[1]), random_phases=args.random_phases)
 
 
 def main(argv: list[str] | None = None) -> int:

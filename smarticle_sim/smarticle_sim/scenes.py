@@ -163,3 +163,19 @@ def random_scene(spec: RobotSpec, gait: GaitConfig, n: int, seed: int = 0, regio
         placed.append(candidate)
         footprints.append(rects)
     return Scene(tuple(placed), name='random', seed=seed)
+
+
+SCENE_KINDS: tuple[str, ...] = ('dense', 'pair', 'random')
+
+
+def build_scene(kind: str, spec: RobotSpec, gait: GaitConfig, robots: int = 7, seed: int = 0,
+                r: float = 1.3, theta: float = math.pi / 2.0, phi: float = math.pi,
+                phases: tuple[float, float] = (0.0, 0.0), random_phases: bool = False) -> Scene:
+    """Build a scene by kind name (``dense``, ``pair`` or ``random``); r in BL, angles in rad."""
+    if kind == 'dense':
+        return dense_scene(spec, gait, robots, seed=seed)
+    if kind == 'random':
+        return random_scene(spec, gait, robots, seed=seed, random_phases=random_phases)
+    if kind == 'pair':
+        return pair_scene(spec, gait, r, theta, phi, phases=phases)
+    raise SceneError(f'scene kind {kind!r} is unknown; choose one of {", ".join(SCENE_KINDS)}')

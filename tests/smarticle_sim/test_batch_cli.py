@@ -54,7 +54,8 @@ def test_cli_pair_run_and_refusals(tmp_path: Path, capsys: pytest.CaptureFixture
 def test_recording_round_trip(tmp_path: Path) -> None:
     config = SimConfig()
     scene = dense_scene(config.robot, GaitConfig.from_degrees(60.0), 3, seed=2)
-    rec = run_trial(config, scene, 0.5, sample_every=2)
+    rec = run_trial(config, scene, 0.5, sample_every=2, record_fsr=True, record_contacts=True)
+    assert rec.meta['fsr_recorded'] and rec.fsr.shape == (len(rec.time), 3, 4)
     back = load_npz(save_npz(rec, tmp_path / 'r.npz'))
     for name in ('time', 'poses', 'arm_angles', 'fsr', 'contacts'):
         assert np.array_equal(getattr(rec, name), getattr(back, name))

@@ -1,0 +1,199 @@
+"""The simulation bridge without ROS: a World driven by external joint commands, with lock-step bookkeeping.
+
+The sim bridge node (``sim_bridge_node.py``) turns messages into calls on ``SimBridgeCore`` and its
+outputs back into messages; everything here is plain Python and NumPy, so tests and benchmarks can
+drive the same code without ROS.
+
+Timing. The core advances in *publish periods*: a whole number of control ticks after which the node
+publishes ``/clock``, joint states, FSR and poses. In lock-step mode the core advances from sim time
+``t_k`` only once every robot has sent a joint command stamped ``t_k`` or later (the gait node in
+``lockstep`` mode answers every ``/clock`` message with exactly one such command), so a run depends
+only on the seed and the commands, never on process scheduling.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from smarticle_driver import topics
+from smarticle_driver.commands import CheckedCommand, check_command
+from smarticle_driver.gait import ALPHA_MAX_RANGE_DEG, GaitConfig
+from smarticle_driver.params import ParamSpec
+
+from .errors import ConfigError
+from .scenes import SCENE_KINDS, build_scene
+from .settings import PRESETS, PhysicsConfig, SimConfig
+from .world import World
+
+NODE_NAME = 'sim_bridge'
+_PHYSICS = PhysicsConfig()
+
+#: Every parameter of the sim bridge node, declared once (node) and shipped as config/sim_bridge.yaml.
+PARAMS: tuple[ParamSpec, ...] = (
+    ParamSpec('preset', 'small', f'robot preset: {", ".join(sorted(PRESETS))}'),
+    ParamSpec('scene', 'dense', f'scene kind: {", ".join(SCENE_KINDS)}'),
+    ParamSpec('robots', 7, 'number of robots (dense and random scenes)', 1, 200),
+    ParamSpec('seed', 1, 'seed of the scene builder'),
+    ParamSpec('alpha_max_deg', 90.0, "amplitude of the robots' start shape in degrees: use the gait "
+              "nodes' alpha_max_deg", ALPHA_MAX_RANGE_DEG[0], ALPHA_MAX_RANGE_DEG[1]),
+    ParamSpec('period', 1.6, "gait period of the start shape (s): use the gait nodes' period", 0.05, 60.0),
+    ParamSpec('pair_r', 1.3, 'pair scene: centre distance in body lengths', 0.1, 10.0),
+    ParamSpec('pair_theta_deg', 0.0, "pair scene: polar angle of robot 1 from robot 0's body x axis (deg)"),
+    ParamSpec('pair_phi_deg', 180.0, 'pair scene: heading of robot 1 minus heading of robot 0 (deg)'),
+    ParamSpec('pair_phase_0', 0.0, 'pair scene: gait phase of robot 0 (fraction of a period)', 0.0, 0.999999),
+    ParamSpec('pair_phase_1', 0.0, 'pair scene: gait phase of robot 1 (fraction of a period)', 0.0, 0.999999),
+    ParamSpec('time_step', _PHYSICS.time_step, 'physics time step (s)', 1e-5, 0.1),
+    ParamSpec('control_tick', _PHYSICS.control_tick, 'control tick (s): a whole number of time steps',
+              1e-5, 1.0),
+    ParamSpec('solver_iterations', _PHYSICS.solver_iterations, 'PyBullet solver iterations', 1, 1000),
+    ParamSpec('publish_period', 0.05, 'sim seconds between publications of /clock, joint states, FSR and '
+              'poses (a whole number of control ticks); in lock-step also the command barrier', 1e-4, 1.0),
+    ParamSpec('mode', 'lockstep', "'lockstep' (deterministic; waits for every robot's command) or 'free'"),
+    ParamSpec('real_time_factor', 0.0, 'free mode: target sim seconds per wall second (0 = as fast as '
+              'possible)', 0.0, 1000.0),
+    ParamSpec('duration', 0.0, 'sim seconds to run before exiting (0 = until stopped)', 0.0, 1e7),
+    ParamSpec('start_at', 0.5, 'publish /smarticles/start with this sim time (s); negative = do not', -1.0,
+              1e7),
+    ParamSpec('pose_noise_xy', 0.0, 'standard deviation of Gaussian noise on published positions (m)',
+              0.0, 1.0),
+    ParamSpec('pose_noise_heading_deg', 0.0, 'standard deviation of noise on published headings (deg)',
+              0.0, 180.0),
+    ParamSpec('noise_seed', 0, 'seed of the pose noise'),
+    ParamSpec('wait_for_subscribers', 0, 'before stepping, wait until /smarticles/poses has this many '
+              'subscribers (lets a recorder or a test connect first)', 0, 100),
+    ParamSpec('joint_limit_deg', 125.0, 'joint commands beyond +-this angle are clamped (deg)', 1.0, 180.0),
+)
+
+
+@dataclass(frozen=True)
+class BridgeSettings:
+    """Checked values of PARAMS as one frozen object (SI units inside)."""
+
+    sim: SimConfig
+    scene_kind: str
+    robots: int
+    seed: int
+    gait: GaitConfig
+    pair: tuple[float, float, float, float, float]   # r (BL), theta (rad), phi (rad), phase 0, phase 1
+    publish_period: float
+    lockstep: bool
+    real_time_factor: float
+    duration: float
+    start_at: float
+    pose_noise: tuple[float, float]                  # (m, rad)
+    noise_seed: int
+    joint_limit: float
+    wait_for_subscribers: int
+
+    @property
+    def ticks_per_publish(self) -> int:
+        """Control ticks per publish period."""
+        ratio = self.publish_period / self.sim.physics.control_tick
+        n = round(ratio)
+        if n < 1 or abs(ratio - n) > 1e-6 * ratio:
+            raise ConfigError(f'{NODE_NAME}.publish_period: {self.publish_period!r} s is not a whole number '
+                              f'of control ticks of {self.sim.physics.control_tick!r} s')
+        return n
+
+    @classmethod
+    def from_values(cls, values: dict[str, Any]) -> BridgeSettings:
+        """Build and validate settings from checked parameter values (ConfigError names the field)."""
+        if values['mode'] not in ('lockstep', 'free'):
+            raise ConfigError(f"{NODE_NAME}.mode must be 'lockstep' or 'free', got {values['mode']!r}")
+        if values['scene'] not in SCENE_KINDS:
+            raise ConfigError(f'{NODE_NAME}.scene must be one of {", ".join(SCENE_KINDS)}, '
+                              f'got {values["scene"]!r}')
+        sim = SimConfig.from_preset(values['preset'], time_step=values['time_step'],
+                                    control_tick=values['control_tick'],
+                                    solver_iterations=values['solver_iterations'])
+        gait = GaitConfig.from_degrees(values['alpha_max_deg'], values['period'], sim.robot.servo_speed)
+        settings = cls(
+            sim, values['scene'], values['robots'], values['seed'], gait,
+            (values['pair_r'], math.radians(values['pair_theta_deg']), math.radians(values['pair_phi_deg']),
+             values['pair_phase_0'], values['pair_phase_1']),
+            values['publish_period'], values['mode'] == 'lockstep', values['real_time_factor'],
+            values['duration'], values['start_at'],
+            (values['pose_noise_xy'], math.radians(values['pose_noise_heading_deg'])),
+            values['noise_seed'], math.radians(values['joint_limit_deg']), values['wait_for_subscribers'])
+        settings.ticks_per_publish  # noqa: B018 - validates publish_period against the control tick
+        return settings
+
+    @classmethod
+    def defaults(cls, **changes: Any) -> BridgeSettings:
+        """Settings from the PARAMS defaults with some values changed (by parameter name)."""
+        values = {spec.name: spec.default for spec in PARAMS}
+        unknown = set(changes) - set(values)
+        if unknown:
+            raise ConfigError(f'unknown sim bridge parameter(s): {", ".join(sorted(unknown))}')
+        values.update(changes)
+        for spec in PARAMS:
+            values[spec.name] = spec.check(values[spec.name], f'{NODE_NAME} parameter')
+        return cls.from_values(values)
+
+
+class SimBridgeCore:
+    """A World whose robots follow external joint commands, advanced one publish period at a time."""
+
+    def __init__(self, settings: BridgeSettings) -> None:
+        self.settings = settings
+        r, theta, phi, p0, p1 = settings.pair
+        scene = build_scene(settings.scene_kind, settings.sim.robot, settings.gait, settings.robots,
+                            seed=settings.seed, r=r, theta=theta, phi=phi, phases=(p0, p1))
+        self.world = World(settings.sim, scene)
+        self.n_robots = self.world.n_robots
+        for k in range(self.n_robots):
+            self.world.set_gait(k, None)
+        self.limits = {name: (-settings.joint_limit, settings.joint_limit) for name in topics.JOINT_NAMES}
+        self.command_stamp_ns = np.full(self.n_robots, -1, dtype=np.int64)
+        self._targets = self.world.arm_angles().copy()
+        self._noise = np.random.default_rng(settings.noise_seed)
+        self.ticks_per_publish = settings.ticks_per_publish
+
+    @property
+    def time(self) -> float:
+        """Sim time (s)."""
+        return self.world.time
+
+    @property
+    def time_ns(self) -> int:
+        """Sim time in integer nanoseconds (the stamp of what is published now)."""
+        return round(self.world.time * 1e9)
+
+    def apply_command(self, robot: int, names: list[str], positions: list[float],
+                      velocities: list[float], stamp_ns: int) -> CheckedCommand:
+        """Check a joint command for ``robot`` and hand its usable part to the physics."""
+        checked = check_command(names, positions, velocities, self.limits, self.settings.sim.robot.servo_speed)
+        if checked.targets:
+            for j, name in enumerate(topics.JOINT_NAMES):
+                if name in checked.targets:
+                    self._targets[robot, j] = checked.targets[name]
+            speed = min(checked.speeds.values())
+            self.world.set_joint_command(robot, (float(self._targets[robot, 0]), float(self._targets[robot, 1])),
+                                         speed)
+        self.command_stamp_ns[robot] = max(self.command_stamp_ns[robot], stamp_ns)
+        return checked
+
+    def waiting_for(self) -> list[int]:
+        """Robots whose command for the current time has not arrived (lock-step barrier)."""
+        return [int(k) for k in np.flatnonzero(self.command_stamp_ns < self.time_ns)]
+
+    def advance(self) -> None:
+        """Run one publish period of control ticks (SimTrouble propagates)."""
+        for _ in range(self.ticks_per_publish):
+            self.world.tick()
+
+    def poses(self) -> np.ndarray:
+        """(N, 3) published poses: ground truth plus the configured Gaussian noise."""
+        poses = self.world.poses()
+        sigma_xy, sigma_heading = self.settings.pose_noise
+        if sigma_xy == 0.0 and sigma_heading == 0.0:
+            return poses
+        noise = self._noise.normal(size=poses.shape) * np.array([sigma_xy, sigma_xy, sigma_heading])
+        return poses + noise
+
+    def close(self) -> None:
+        """Release the physics client."""
+        self.world.close()

@@ -1,0 +1,254 @@
+"""ROS node `sim_bridge`: the PyBullet world behind the hardware's topics.
+
+For every robot k it subscribes to ``/smarticle_<k>/joint_commands`` and publishes
+``/smarticle_<k>/joint_states``, ``/smarticle_<k>/fsr`` (only while someone subscribes) and
+``/smarticle_<k>/pose`` (likewise); arena-wide it publishes ``/smarticles/poses``, ``/clock`` and
+``/diagnostics``, and optionally ``/smarticles/start``. Run the gait nodes with ``use_sim_time:=true``
+(and ``lockstep:=true`` in lock-step mode). See docs/sim_bridge.md.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import time
+from typing import Any
+
+import rclpy
+from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
+from geometry_msgs.msg import Pose
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.time import Time
+from smarticle_driver import topics
+from smarticle_driver.params import ParameterError, declare_and_read
+
+from .bridge import NODE_NAME, PARAMS, BridgeSettings, SimBridgeCore
+from .errors import SimError, SimTrouble
+
+_COMMAND_TOPIC = re.compile(r'^/smarticle_(\d+)/joint_commands$')
+
+
+def _msg(key: str) -> Any:
+    """Message class of contract entry ``key``."""
+    return topics.message_class(topics.spec_of(key).type)
+
+
+class SimBridgeNode(Node):
+    """Thin ROS shell around SimBridgeCore."""
+
+    def __init__(self) -> None:
+        super().__init__(NODE_NAME)
+        values = declare_and_read(self, PARAMS)
+        try:
+            self.settings = BridgeSettings.from_values(values)
+            self.core = SimBridgeCore(self.settings)
+        except (SimError, ValueError) as err:
+            raise ParameterError(f'node {NODE_NAME}: {err}') from err
+        n = self.core.n_robots
+        self.JointState, self.Clock = _msg('joint_states'), _msg('clock')
+        self.PoseArray, self.PoseStamped = _msg('poses'), _msg('pose')
+        self.Diagnostics = _msg('diagnostics')
+        qos = {key: topics.qos_profile(topics.spec_of(key).qos) for key in topics.BY_KEY}
+        self.clock_pub = self.create_publisher(self.Clock, topics.topic('clock'), qos['clock'])
+        self.poses_pub = self.create_publisher(self.PoseArray, topics.topic('poses'), qos['poses'])
+        self.diag_pub = self.create_publisher(self.Diagnostics, topics.topic('diagnostics'), qos['diagnostics'])
+        self.joint_pubs = [self.create_publisher(self.JointState, topics.topic('joint_states', k),
+                                                 qos['joint_states']) for k in range(n)]
+        self.fsr_pubs = [self.create_publisher(self.JointState, topics.topic('fsr', k), qos['fsr'])
+                         for k in range(n)]
+        self.pose_pubs = [self.create_publisher(self.PoseStamped, topics.topic('pose', k), qos['pose'])
+                          for k in range(n)]
+        for k in range(n):
+            self.create_subscription(self.JointState, topics.topic('joint_commands', k),
+                                     lambda msg, k=k: self.on_command(k, msg), qos['joint_commands'])
+        self.start_pub = None
+        if self.settings.start_at >= 0.0:
+            header = _msg('start')
+            self.start_pub = self.create_publisher(header, topics.topic('start'), qos['start'])
+            start = header()
+            start.stamp = Time(nanoseconds=round(self.settings.start_at * 1e9)).to_msg()
+            self.start_pub.publish(start)
+        self.counts: dict[str, int] = {}
+        self.warned_ids: set[int] = set()
+        self.create_timer(2.0, self.scan_for_unknown_robots, clock=rclpy.clock.Clock())
+        self.get_logger().info(
+            f'{n} robots, scene {self.settings.scene_kind}, '
+            f'mode {"lockstep" if self.settings.lockstep else "free"}, '
+            f'time step {self.settings.sim.physics.time_step:.6g} s, publishing every '
+            f'{self.settings.publish_period:g} s')
+
+    # ------------------------------------------------------------------ callbacks
+    def on_command(self, robot: int, msg: Any) -> None:
+        """Hand a joint command to the core; report what it dropped or changed."""
+        stamp = Time.from_msg(msg.header.stamp).nanoseconds
+        checked = self.core.apply_command(robot, list(msg.name), list(msg.position), list(msg.velocity),
+                                          stamp)
+        for counter, count in checked.counts.items():
+            self.counts[counter] = self.counts.get(counter, 0) + count
+        for warning in checked.warnings:
+            self.get_logger().warning(f'robot {robot}: {warning}', throttle_duration_sec=2.0)
+
+    def scan_for_unknown_robots(self) -> None:
+        """Warn (once per id) about joint commands published for robots the scene does not have."""
+        for name, _ in self.get_topic_names_and_types():
+            match = _COMMAND_TOPIC.match(name)
+            if match is None:
+                continue
+            k = int(match.group(1))
+            if k >= self.core.n_robots and k not in self.warned_ids and self.count_publishers(name) > 0:
+                self.warned_ids.add(k)
+                self.counts['unknown_robot_ids'] = self.counts.get('unknown_robot_ids', 0) + 1
+                self.get_logger().warning(f'commands on {name} dropped: the scene has robots '
+                                          f'0..{self.core.n_robots - 1} only')
+
+    # ------------------------------------------------------------------ outputs
+    def publish_outputs(self) -> None:
+        """Publish /clock, joint states, FSR (if subscribed), poses."""
+        now = Time(nanoseconds=self.core.time_ns).to_msg()
+        clock = self.Clock()
+        clock.clock = now
+        self.clock_pub.publish(clock)
+        world = self.core.world
+        state = world.state()
+        poses = self.core.poses()
+        for k, pub in enumerate(self.joint_pubs):
+            msg = self.JointState()
+            msg.header.stamp = now
+            msg.name = list(topics.JOINT_NAMES)
+            msg.position = [float(v) for v in state.arm_angles[k]]
+            msg.velocity = [float(v) for v in state.arm_velocities[k]]
+            pub.publish(msg)
+        listened = [k for k, pub in enumerate(self.fsr_pubs) if pub.get_subscription_count() > 0]
+        if listened:
+            forces = world.fsr(listened)
+            for row, k in enumerate(listened):
+                msg = self.JointState()
+                msg.header.stamp = now
+                msg.name = list(topics.FSR_FACES)
+                msg.effort = [float(v) for v in forces[row]]
+                self.fsr_pubs[k].publish(msg)
+        array = self.PoseArray()
+        array.header.stamp = now
+        array.header.frame_id = topics.ARENA_FRAME
+        array.poses = [self._pose(p) for p in poses]
+        self.poses_pub.publish(array)
+        for k, pub in enumerate(self.pose_pubs):
+            if pub.get_subscription_count() > 0:
+                msg = self.PoseStamped()
+                msg.header = array.header
+                msg.pose = array.poses[k]
+                pub.publish(msg)
+
+    def _pose(self, xyh: Any) -> Any:
+        """geometry_msgs/Pose of a planar pose (yaw = heading of the body normal)."""
+        pose = Pose()
+        pose.position.x, pose.position.y = float(xyh[0]), float(xyh[1])
+        pose.orientation.z, pose.orientation.w = math.sin(xyh[2] / 2.0), math.cos(xyh[2] / 2.0)
+        return pose
+
+    def publish_diagnostics(self, level: int, message: str, rtf: float) -> None:
+        """Publish the bridge's status and counters on /diagnostics."""
+        array = self.Diagnostics()
+        array.header.stamp = self.get_clock().now().to_msg()
+        status = DiagnosticStatus(level=bytes([level]), name=f'{NODE_NAME}', message=message,
+                                  hardware_id='pybullet')
+        values = {'sim_time': f'{self.core.time:.3f}', 'real_time_factor': f'{rtf:.2f}', **{
+            k: str(v) for k, v in self.counts.items()}}
+        status.values = [KeyValue(key=k, value=v) for k, v in values.items()]
+        array.status = [status]
+        self.diag_pub.publish(array)
+
+    # ------------------------------------------------------------------ loop
+    def run(self, executor: SingleThreadedExecutor) -> int:
+        """Step the world until the duration is reached or ROS shuts down; return an exit code."""
+        settings = self.settings
+        end_ns = round(settings.duration * 1e9) if settings.duration > 0 else None
+        wall0, sim0 = time.monotonic(), self.core.time
+        last_diag = wall0
+        self.wait_for_subscribers(executor)
+        wall0 = time.monotonic()
+        self.publish_outputs()
+        while rclpy.ok():
+            if settings.lockstep:
+                self.wait_for_commands(executor)
+            else:
+                for _ in range(self.core.n_robots + 4):
+                    executor.spin_once(timeout_sec=0.0)
+            if end_ns is not None and self.core.time_ns >= end_ns:
+                break
+            try:
+                self.core.advance()
+            except SimTrouble as trouble:
+                self.get_logger().error(str(trouble))
+                self.publish_diagnostics(2, str(trouble), 0.0)
+                return 3
+            self.publish_outputs()
+            wall = time.monotonic()
+            if settings.real_time_factor > 0.0 and not settings.lockstep:
+                ahead = (self.core.time - sim0) / settings.real_time_factor - (wall - wall0)
+                if ahead > 0:
+                    time.sleep(ahead)
+            if wall - last_diag >= 1.0:
+                rtf = (self.core.time - sim0) / max(wall - wall0, 1e-9)
+                self.publish_diagnostics(0, 'running', rtf)
+                last_diag = wall
+        rtf = (self.core.time - sim0) / max(time.monotonic() - wall0, 1e-9)
+        self.get_logger().info(f'done at sim time {self.core.time:.2f} s, real-time factor {rtf:.2f}')
+        self.publish_diagnostics(0, 'finished', rtf)
+        return 0
+
+    def wait_for_subscribers(self, executor: SingleThreadedExecutor) -> None:
+        """Hold the start until /smarticles/poses has the configured number of subscribers."""
+        started = time.monotonic()
+        while rclpy.ok() and self.poses_pub.get_subscription_count() < self.settings.wait_for_subscribers:
+            executor.spin_once(timeout_sec=0.05)
+            if time.monotonic() - started > 5.0:
+                self.get_logger().warning('waiting for subscribers of /smarticles/poses',
+                                          throttle_duration_sec=5.0)
+
+    def wait_for_commands(self, executor: SingleThreadedExecutor) -> None:
+        """Lock-step barrier: spin until every robot's command for the current time has arrived."""
+        started = last = time.monotonic()
+        while rclpy.ok():
+            missing = self.core.waiting_for()
+            if not missing:
+                return
+            executor.spin_once(timeout_sec=0.005)
+            now = time.monotonic()
+            if now - last > 0.5:  # a gait node that joined late missed the (best-effort) clock: resend
+                clock = self.Clock()
+                clock.clock = Time(nanoseconds=self.core.time_ns).to_msg()
+                self.clock_pub.publish(clock)
+                last = now
+                if now - started > 5.0:
+                    self.get_logger().warning(f'lock-step: waiting for joint commands of robots {missing} '
+                                              f'at sim time {self.core.time:.3f} s', throttle_duration_sec=5.0)
+
+
+def main(args: list[str] | None = None) -> None:
+    """Entry point of `ros2 run smarticle_sim sim_bridge`."""
+    rclpy.init(args=args)
+    node = None
+    code = 0
+    try:
+        node = SimBridgeNode()
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        code = node.run(executor)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except ParameterError as err:
+        rclpy.logging.get_logger(NODE_NAME).fatal(str(err))
+        code = 2
+    finally:
+        if node is not None:
+            node.core.close()
+            node.destroy_node()
+        rclpy.try_shutdown()
+    if code:
+        raise SystemExit(code)
+
+
+if __name__ == '__main__':
+    main()

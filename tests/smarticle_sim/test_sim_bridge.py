@@ -1,0 +1,167 @@
+"""The sim bridge: its pure core, and the real node in lock-step with real gait nodes over DDS."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from smarticle_driver import topics
+from smarticle_driver.gait import GaitConfig, SquareGait, open_loop_angles
+from smarticle_driver.params import read_defaults_yaml
+from smarticle_sim.bridge import NODE_NAME, PARAMS, BridgeSettings, SimBridgeCore
+from smarticle_sim.errors import ConfigError
+
+from tests.conftest import spin_until
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_shipped_yaml_equals_declared_defaults() -> None:
+    shipped = read_defaults_yaml(str(ROOT / 'smarticle_sim' / 'config' / 'sim_bridge.yaml'), NODE_NAME)
+    assert shipped == {spec.name: spec.default for spec in PARAMS}
+
+
+@pytest.mark.parametrize('changes, field', [
+    ({'publish_period': 0.051}, 'publish_period'),
+    ({'scene': 'cloud'}, 'scene'),
+    ({'mode': 'fast'}, 'mode'),
+    ({'preset': 'huge'}, 'preset'),
+    ({'time_step': 0.0}, 'time_step'),
+    ({'robots': 0}, 'robots'),
+])
+def test_invalid_settings_name_the_field(changes: dict[str, object], field: str) -> None:
+    with pytest.raises(ValueError, match=field):
+        BridgeSettings.defaults(**changes)
+
+
+def test_unknown_parameter_is_refused() -> None:
+    with pytest.raises(ConfigError, match='bogus'):
+        BridgeSettings.defaults(bogus=1)
+
+
+def drive_with_gait_cores(core: SimBridgeCore, gaits: list[SquareGait], periods: int) -> list[np.ndarray]:
+    """Run the core as the lock-step ROS path does, with the gait cores answering every barrier."""
+    out = [core.world.poses().copy()]
+    for _ in range(periods):
+        for k, gait in enumerate(gaits):
+            cmd = gait.command(core.time_ns * 1e-9)
+            core.apply_command(k, list(topics.JOINT_NAMES), list(cmd.targets), [cmd.speed] * 2, core.time_ns)
+        assert core.waiting_for() == []
+        core.advance()
+        out.append(core.world.poses().copy())
+    return out
+
+
+def test_core_barrier_waits_for_every_robot_and_drops_bad_commands() -> None:
+    core = SimBridgeCore(BridgeSettings.defaults(scene='pair'))
+    try:
+        assert core.waiting_for() == [0, 1]
+        bad = core.apply_command(0, ['arm1', 'arm2', 'tail'], [math.nan, 3.0, 0.0], [], core.time_ns)
+        assert bad.counts == {'nonfinite_targets': 1, 'unknown_joints': 1, 'clamped_targets': 1}
+        assert core.waiting_for() == [1]
+        assert np.all(np.isfinite(core.world.poses()))
+    finally:
+        core.close()
+
+
+def test_core_is_deterministic_for_the_same_seed() -> None:
+    runs = []
+    for _ in range(2):
+        core = SimBridgeCore(BridgeSettings.defaults(robots=3, scene='random', seed=4))
+        gaits = [SquareGait(GaitConfig.from_degrees(90.0)) for _ in range(3)]
+        for gait in gaits:
+            gait.start(0.5)
+        try:
+            runs.append(np.array(drive_with_gait_cores(core, gaits, 40)))
+        finally:
+            core.close()
+    assert np.array_equal(runs[0], runs[1])
+
+
+@pytest.mark.integration
+def test_gait_nodes_drive_the_sim_in_lockstep_deterministically(nodes, ros_node) -> None:  # type: ignore[no-untyped-def]
+    from geometry_msgs.msg import PoseArray
+    from sensor_msgs.msg import JointState
+
+    duration = 4.0
+    runs: list[dict[int, np.ndarray]] = []
+    states: dict[int, tuple[float, float]] = {}
+    for run in range(2):
+        node = ros_node(f'bridge_probe_{run}')
+        poses: dict[int, np.ndarray] = {}
+        node.create_subscription(
+            PoseArray, topics.topic('poses'),
+            lambda m, poses=poses: poses.__setitem__(
+                m.header.stamp.sec * 10**9 + m.header.stamp.nanosec,
+                np.array([[p.position.x, p.position.y, p.orientation.z, p.orientation.w] for p in m.poses])),
+            topics.qos_profile(topics.Qos.SENSOR))
+        if run == 0:
+            node.create_subscription(
+                JointState, topics.topic('joint_states', 0),
+                lambda m: states.__setitem__(m.header.stamp.sec * 10**9 + m.header.stamp.nanosec,
+                                             tuple(m.position)),
+                topics.qos_profile(topics.Qos.SENSOR))
+        for k in range(2):
+            nodes.start('gait', '--ros-args', '-p', f'robot_id:={k}', '-p', 'lockstep:=true',
+                        '-p', 'use_sim_time:=true')
+        bridge = nodes.start('sim_bridge', '--ros-args', '-p', 'scene:=pair', '-p', 'pair_r:=2.5',
+                             '-p', f'duration:={duration}', '-p', 'start_at:=0.5',
+                             '-p', 'wait_for_subscribers:=1')
+        spin_until(node, lambda bridge=bridge: bridge.poll() is not None, 90.0)
+        spin_until(node, lambda: False, 0.3)
+        assert bridge.returncode == 0, nodes.output(bridge)
+        nodes.stop_all()
+        nodes.procs.clear()
+        runs.append(poses)
+    common = sorted(set(runs[0]) & set(runs[1]))
+    assert len(common) >= 0.8 * duration / 0.05, 'too few pose messages arrived'
+    for stamp in common:
+        assert np.array_equal(runs[0][stamp], runs[1][stamp]), f'runs differ at t = {stamp * 1e-9:.2f} s'
+    # robot 0's joint states follow the square gait: at the end of each quarter the arms sit at its corner
+    gait = GaitConfig.from_degrees(90.0)
+    checked = 0
+    for stamp, angles in states.items():
+        tau = (stamp * 1e-9 - 0.5) / gait.period
+        if tau > 0 and 0.85 < (4 * tau) % 1.0 < 0.99:   # late in a quarter: the stroke is over
+            assert angles == pytest.approx(open_loop_angles(gait, tau), abs=math.radians(6.0))
+            checked += 1
+    assert checked >= 8
+
+
+@pytest.mark.integration
+def test_bridge_core_and_ros_path_agree(nodes, ros_node) -> None:  # type: ignore[no-untyped-def]
+    from geometry_msgs.msg import PoseArray
+
+    duration = 2.0
+    node = ros_node('agree_probe')
+    poses: dict[int, np.ndarray] = {}
+    node.create_subscription(
+        PoseArray, topics.topic('poses'),
+        lambda m: poses.__setitem__(m.header.stamp.sec * 10**9 + m.header.stamp.nanosec,
+                                    np.array([[p.position.x, p.position.y] for p in m.poses])),
+        topics.qos_profile(topics.Qos.SENSOR))
+    for k in range(2):
+        nodes.start('gait', '--ros-args', '-p', f'robot_id:={k}', '-p', 'lockstep:=true', '-p', 'use_sim_time:=true')
+    bridge = nodes.start('sim_bridge', '--ros-args', '-p', 'scene:=pair', '-p', f'duration:={duration}',
+                         '-p', 'wait_for_subscribers:=1')
+    spin_until(node, lambda: bridge.poll() is not None, 90.0)
+    spin_until(node, lambda: False, 0.3)
+    assert bridge.returncode == 0, nodes.output(bridge)
+
+    core = SimBridgeCore(BridgeSettings.defaults(scene='pair'))
+    gaits = [SquareGait(GaitConfig.from_degrees(90.0)) for _ in range(2)]
+    for gait in gaits:
+        gait.start(0.5)
+    try:
+        batch = drive_with_gait_cores(core, gaits, round(duration / 0.05))
+    finally:
+        core.close()
+    matched = 0
+    for i, ref in enumerate(batch):
+        stamp = round(i * 0.05 * 1e9)
+        if stamp in poses:
+            assert np.array_equal(poses[stamp], ref[:, :2]), f'differs at t = {i * 0.05:.2f} s'
+            matched += 1
+    assert matched >= 0.8 * len(batch)
