@@ -113,7 +113,6 @@ def test_gait_nodes_drive_the_sim_in_lockstep_deterministically(nodes, ros_node)
         spin_until(node, lambda: False, 0.3)
         assert bridge.returncode == 0, nodes.output(bridge)
         nodes.stop_all()
-        nodes.procs.clear()
         runs.append(poses)
     common = sorted(set(runs[0]) & set(runs[1]))
     assert len(common) >= 0.8 * duration / 0.05, 'too few pose messages arrived'

@@ -1,0 +1,161 @@
+"""The main demo: a sim-in-the-loop run of the stack with its default settings.
+
+Starts the sim bridge and one gait node per robot as separate processes talking over DDS (lock-step,
+so the run is reproducible), listens to ``/smarticles/poses`` like any other node would, then finds
+the gliders with the glider analysis core, prints a table and writes figures and the poses to
+``out/demo/``. Usage: ``./demo.sh [--robots 7] [--periods 100] [--alpha-max 90] [--seed 1]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+START_AT = 0.5  # sim time (s) of the synchronised gait start
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Command-line options of the demo."""
+    parser = argparse.ArgumentParser(prog='demo.sh', description=__doc__.split('\n')[0] if __doc__ else None)
+    parser.add_argument('--robots', type=int, default=7, help='number of robots (default 7, as in the paper)')
+    parser.add_argument('--scene', choices=('dense', 'random', 'pair'), default='dense',
+                        help="starting arrangement (default: densely packed, the paper's Fig. 1(c))")
+    parser.add_argument('--periods', type=float, default=100.0, help='gait periods to run (default 100)')
+    parser.add_argument('--alpha-max', type=float, default=90.0, help='gait amplitude in degrees (default 90)')
+    parser.add_argument('--seed', type=int, default=1, help='seed of the starting arrangement')
+    parser.add_argument('--min-periods', type=int, default=30,
+                        help='a pair bound this many periods is a glider (default 30, as in the paper)')
+    parser.add_argument('--out', type=Path, default=Path('out/demo'), help='output folder')
+    return parser
+
+
+def yaw(qz: np.ndarray, qw: np.ndarray) -> np.ndarray:
+    """Heading (rad) of planar quaternions (rotation about z)."""
+    return 2.0 * np.arctan2(qz, qw)
+
+
+def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.ndarray, float]:
+    """Run sim bridge + gait nodes; return sample times (s after the start), poses (T, N, 3), RTF."""
+    import os
+
+    import rclpy
+    from geometry_msgs.msg import PoseArray
+    from smarticle_driver import topics
+    from smarticle_driver.launching import ProcessGroup, isolated_ros_env
+
+    env = isolated_ros_env()
+    os.environ.update({k: env[k] for k in ('ROS_DOMAIN_ID', 'ROS_AUTOMATIC_DISCOVERY_RANGE')})
+    period = 1.6
+    duration = START_AT + args.periods * period
+    samples: dict[int, np.ndarray] = {}
+
+    def on_poses(msg: Any) -> None:
+        stamp = msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
+        samples[stamp] = np.array([[p.position.x, p.position.y, p.orientation.z, p.orientation.w]
+                                   for p in msg.poses])
+
+    rclpy.init()
+    node = rclpy.create_node('demo_listener')
+    node.create_subscription(PoseArray, topics.topic('poses'), on_poses, topics.qos_profile(topics.Qos.SENSOR))
+    try:
+        with ProcessGroup(log_dir, env) as group:
+            common = ['-p', f'alpha_max_deg:={args.alpha_max}', '-p', f'period:={period}']
+            for k in range(args.robots):
+                group.start('gait', '--ros-args', '-p', f'robot_id:={k}', '-p', 'lockstep:=true',
+                            '-p', 'use_sim_time:=true', *common)
+            bridge = group.start('sim_bridge', '--ros-args', '-p', f'robots:={args.robots}',
+                                 '-p', f'scene:={args.scene}', '-p', f'seed:={args.seed}',
+                                 '-p', f'duration:={duration}', '-p', f'start_at:={START_AT}',
+                                 '-p', 'wait_for_subscribers:=1', *common)
+            print(f'[demo] sim bridge + {args.robots} gait nodes started (domain {env["ROS_DOMAIN_ID"]}, '
+                  f'logs in {log_dir}); simulating {args.periods:g} periods = {duration:.1f} s', flush=True)
+            wall0 = time.monotonic()
+            last = wall0
+            while bridge.poll() is None:
+                rclpy.spin_once(node, timeout_sec=0.05)
+                if time.monotonic() - last > 5.0 and samples:
+                    last = time.monotonic()
+                    sim = max(samples) * 1e-9
+                    print(f'[demo] sim time {sim:6.1f} / {duration:.1f} s  ({sim / duration:4.0%}), '
+                          f'{sim / (last - wall0):.1f}x real time', flush=True)
+            for _ in range(20):
+                rclpy.spin_once(node, timeout_sec=0.02)
+            wall = time.monotonic() - wall0
+            if bridge.returncode != 0:
+                raise RuntimeError(f'sim bridge exited with code {bridge.returncode}:\n'
+                                   + group.output(bridge)[-2000:])
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+    stamps = np.array(sorted(samples))
+    raw = np.array([samples[s] for s in stamps])
+    poses = np.concatenate([raw[..., :2], yaw(raw[..., 2], raw[..., 3])[..., None]], axis=-1)
+    rtf = (stamps[-1] * 1e-9) / wall if len(stamps) else 0.0
+    return stamps * 1e-9 - START_AT, poses, rtf
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the demo; return the exit code."""
+    import matplotlib
+
+    matplotlib.use('Agg')
+    from smarticle_tracking.glider_plots import plot_glider_analysis
+    from smarticle_tracking.gliders import GliderConfig, analyse_gliders, format_glider_table, glider_table
+
+    args = build_parser().parse_args(argv)
+    if args.robots < 1 or args.periods <= 0:
+        print('demo: --robots must be >= 1 and --periods > 0', file=sys.stderr)
+        return 2
+    args.out.mkdir(parents=True, exist_ok=True)
+    times, poses, rtf = run_stack(args, args.out / 'logs')
+    keep = times >= 0.0
+    times, poses = times[keep], poses[keep]
+    np.savez_compressed(args.out / 'poses.npz', time=times, poses=poses)
+    config = GliderConfig(min_periods=args.min_periods)
+    analysis = analyse_gliders(times, poses, config)
+    rows = glider_table(analysis.gliders, config)
+    print(f'\n[demo] {args.robots} robots, {args.scene} start, alpha_max {args.alpha_max:g} deg, '
+          f'{times[-1] / 1.6:.0f} periods received over DDS, {rtf:.1f}x real time')
+    print(f'[demo] gliders (pairs bound >= {args.min_periods} periods):')
+    print(format_glider_table(rows) if rows else '  none found in this run')
+    moved = np.linalg.norm(poses[-1, :, :2] - poses[0, :, :2], axis=1) / config.width
+    print('[demo] net displacement of each robot (W): ' + ', '.join(f'{k}: {d:.2f}' for k, d in enumerate(moved)))
+    plot_trajectories(times, poses, config.width, args.out / 'trajectories.png')
+    written = [args.out / 'trajectories.png', args.out / 'poses.npz']
+    if analysis.gliders:
+        plot_glider_analysis(analysis, args.out / 'gliders.png')
+        written.append(args.out / 'gliders.png')
+    print('[demo] wrote ' + ', '.join(str(p) for p in written))
+    return 0
+
+
+def plot_trajectories(times: np.ndarray, poses: np.ndarray, width: float, path: Path) -> None:
+    """Draw every robot's body-centre path (in W) with start and end markers."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(6, 6), dpi=100)
+    ax = fig.add_subplot(1, 1, 1)
+    xy = poses[:, :, :2] / width
+    for k in range(xy.shape[1]):
+        line, = ax.plot(xy[:, k, 0], xy[:, k, 1], lw=0.8, label=f'robot {k}')
+        ax.plot(*xy[0, k], 'o', color=line.get_color(), ms=4)
+        ax.plot(*xy[-1, k], 's', color=line.get_color(), ms=5)
+        ax.annotate('', xy=xy[-1, k] + 0.4 * np.array([math.cos(poses[-1, k, 2]), math.sin(poses[-1, k, 2])]),
+                    xytext=xy[-1, k], arrowprops={'arrowstyle': '->', 'color': line.get_color()})
+    ax.set_aspect('equal')
+    ax.set_xlabel('x (W)')
+    ax.set_ylabel('y (W)')
+    ax.set_title(f'sim-in-the-loop: {xy.shape[1]} robots, {times[-1]:.0f} s (o start, square end, arrow heading)',
+                 fontsize=9)
+    ax.legend(fontsize=7)
+    fig.savefig(path)
+
+
+if __name__ == '__main__':
+    sys.exit(main())
