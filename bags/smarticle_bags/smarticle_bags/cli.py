@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import importlib
 import logging
 import sys
 from pathlib import Path
@@ -107,6 +106,10 @@ def build_parser() -> argparse.ArgumentParser:
                        description='Feed the bag\'s poses to smarticle_tracking.gliders.')
     p.add_argument('bag', help='bag folder or .mcap file')
     p.add_argument('--topic', default='/smarticles/poses', help='PoseArray topic with the robot poses')
+    p.add_argument('--period', type=float, default=1.6, help='gait period (s) (default 1.6)')
+    p.add_argument('--min-periods', type=int, default=30,
+                   help='bound this many periods makes a glider (default 30, as in the paper)')
+    p.add_argument('--plot', default=None, help='PNG of the gliders (default: <bag>_gliders.png)')
     p = sub.add_parser('reindex', help='rebuild metadata.yaml from the .mcap files, repairing damaged ones',
                        description='Rebuild metadata.yaml; a damaged .mcap is rewritten with every readable '
                                    'message and the original is kept as <name>.mcap.damaged.')
@@ -142,24 +145,32 @@ def _play(ns: argparse.Namespace, ros_args: list[str] | None) -> int:
 
 
 def _analyze(ns: argparse.Namespace) -> int:
-    """Feed the poses of a bag to smarticle_tracking.gliders, when that module is available."""
+    """Feed the poses of a bag to the glider analysis (smarticle_tracking.gliders): table and plots."""
     try:
-        gliders = importlib.import_module('smarticle_tracking.gliders')
+        from smarticle_tracking.glider_plots import plot_glider_analysis
+        from smarticle_tracking.gliders import GliderConfig, analyse_gliders, format_glider_table, glider_table
     except ImportError as err:
-        print(f'{PROG} analyze: the glider analysis (smarticle_tracking.gliders) is not available ({err}); '
+        print(f'{PROG} analyze: the glider analysis (smarticle_tracking) is not available ({err}); '
               f'install smarticle_tracking or use "{PROG} export" and analyse the CSV files', file=sys.stderr)
-        return 3
-    analyze = getattr(gliders, 'analyze_poses', None)
-    if analyze is None:
-        # TODO(bags): wire to the glider API once smarticle_tracking.gliders settles it.
-        print(f'{PROG} analyze: smarticle_tracking.gliders has no analyze_poses(times, xyh) entry point yet',
-              file=sys.stderr)
         return 3
     from . import arrays
     from .reader import BagReader
 
     poses = arrays.read_poses(BagReader(ns.bag), ns.topic)
-    print(analyze(poses.stamp, poses.xyh))
+    if len(poses.stamp) < 2:
+        print(f'{PROG} analyze: {ns.topic} has {len(poses.stamp)} message(s) in {ns.bag}; nothing to analyse',
+              file=sys.stderr)
+        return 2
+    config = GliderConfig(period=ns.period, min_periods=ns.min_periods)
+    analysis = analyse_gliders(poses.stamp - poses.stamp[0], poses.xyh, config)
+    rows = glider_table(analysis.gliders, config)
+    print(f'{ns.bag}: {poses.xyh.shape[1]} robots, {len(poses.stamp)} pose messages over '
+          f'{poses.stamp[-1] - poses.stamp[0]:.1f} s; gliders bound >= {ns.min_periods} periods:')
+    print(format_glider_table(rows) if rows else '  none')
+    if analysis.gliders:
+        out = Path(ns.plot) if ns.plot else Path(str(ns.bag).rstrip('/') + '_gliders.png')
+        plot_glider_analysis(analysis, out)
+        print(f'wrote {out}')
     return 0
 
 

@@ -1,0 +1,51 @@
+"""`smarticle-bag analyze`: a bag of poses goes through the glider analysis to a table and a figure."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+from smarticle_bags import cli
+from smarticle_bags.writer import BagWriter, WriterOptions
+
+from .helpers import STORE, T0
+
+
+def glider_poses(i: int, dt: float) -> bytes:
+    """Two anti-aligned robots 1.3 BL apart gliding together in +x, a third far away at rest."""
+    types = STORE.types
+    t = i * dt
+    xs = [(0.002 * t, 0.0, math.pi / 2), (0.002 * t, 0.07, -math.pi / 2), (0.25, 0.25, 0.0)]
+    poses = [types['geometry_msgs/msg/Pose'](
+        position=types['geometry_msgs/msg/Point'](x=x, y=y, z=0.0),
+        orientation=types['geometry_msgs/msg/Quaternion'](x=0.0, y=0.0, z=math.sin(h / 2), w=math.cos(h / 2)))
+        for x, y, h in xs]
+    stamp = types['builtin_interfaces/msg/Time'](sec=int(t), nanosec=int(round((t % 1) * 1e9)))
+    msg = types['geometry_msgs/msg/PoseArray'](header=types['std_msgs/msg/Header'](stamp=stamp, frame_id='arena'),
+                                               poses=poses)
+    return bytes(STORE.serialize_cdr(msg, 'geometry_msgs/msg/PoseArray'))
+
+
+def test_analyze_finds_the_glider_in_a_bag(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    dt, frames = 0.1, 16 * 40  # 40 gait periods of 1.6 s
+    with BagWriter(tmp_path / 'bag', WriterOptions()) as writer:
+        writer.add_topic('/smarticles/poses', 'geometry_msgs/msg/PoseArray')
+        for i in range(frames):
+            writer.write('/smarticles/poses', glider_poses(i, dt), T0 + round(i * dt * 1e9))
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main(['analyze', str(tmp_path / 'bag'), '--plot', str(tmp_path / 'g.png')])
+    out = capsys.readouterr().out
+    assert exit_info.value.code == 0, out
+    rows = [line for line in out.splitlines() if 'C1' in line]
+    assert len(rows) == 1, out        # one glider, pair (0, 1), anti-aligned
+    assert (tmp_path / 'g.png').stat().st_size > 10_000
+
+
+def test_analyze_of_a_bag_without_poses_is_a_clear_error(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    with BagWriter(tmp_path / 'bag', WriterOptions()) as writer:
+        writer.add_topic('/smarticles/poses', 'geometry_msgs/msg/PoseArray')
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main(['analyze', str(tmp_path / 'bag')])
+    assert exit_info.value.code == 2
+    assert 'nothing to analyse' in capsys.readouterr().err
