@@ -17,6 +17,7 @@ from typing import Any
 import rclpy
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Pose
+from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.time import Time
@@ -53,12 +54,15 @@ class SimBridgeNode(Node):
         self.clock_pub = self.create_publisher(self.Clock, topics.topic('clock'), qos['clock'])
         self.poses_pub = self.create_publisher(self.PoseArray, topics.topic('poses'), qos['poses'])
         self.diag_pub = self.create_publisher(self.Diagnostics, topics.topic('diagnostics'), qos['diagnostics'])
+        # per-robot outputs without QoS-event handlers: each one would add two waitables to every
+        # executor wait, which dominates the lock-step loop with many robots
+        quiet = PublisherEventCallbacks(use_default_callbacks=False)
         self.joint_pubs = [self.create_publisher(self.JointState, topics.topic('joint_states', k),
-                                                 qos['joint_states']) for k in range(n)]
-        self.fsr_pubs = [self.create_publisher(self.JointState, topics.topic('fsr', k), qos['fsr'])
-                         for k in range(n)]
-        self.pose_pubs = [self.create_publisher(self.PoseStamped, topics.topic('pose', k), qos['pose'])
-                          for k in range(n)]
+                                                 qos['joint_states'], event_callbacks=quiet) for k in range(n)]
+        self.fsr_pubs = [self.create_publisher(self.JointState, topics.topic('fsr', k), qos['fsr'],
+                                               event_callbacks=quiet) for k in range(n)]
+        self.pose_pubs = [self.create_publisher(self.PoseStamped, topics.topic('pose', k), qos['pose'],
+                                                event_callbacks=quiet) for k in range(n)]
         for k in range(n):
             self.create_subscription(self.JointState, topics.topic('joint_commands', k),
                                      lambda msg, k=k: self.on_command(k, msg), qos['joint_commands'])
@@ -104,7 +108,7 @@ class SimBridgeNode(Node):
 
     # ------------------------------------------------------------------ outputs
     def publish_outputs(self) -> None:
-        """Publish /clock, joint states, FSR (if subscribed), poses."""
+        """Publish /clock and poses, and joint states, FSR and per-robot poses of robots someone listens to."""
         now = Time(nanoseconds=self.core.time_ns).to_msg()
         clock = self.Clock()
         clock.clock = now
@@ -113,6 +117,8 @@ class SimBridgeNode(Node):
         state = world.state()
         poses = self.core.poses()
         for k, pub in enumerate(self.joint_pubs):
+            if pub.get_subscription_count() == 0:
+                continue  # nobody listens: skip the message (a new subscriber gets the next one)
             msg = self.JointState()
             msg.header.stamp = now
             msg.name = list(topics.JOINT_NAMES)

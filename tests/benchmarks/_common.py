@@ -105,3 +105,15 @@ def timed(fn: Callable[[], Any]) -> tuple[Any, float]:
     start = time.perf_counter()
     result = fn()
     return result, time.perf_counter() - start
+
+
+def add_clock_argument(parser: Any) -> None:
+    """``--clock cpu|wall``: what the timings measure (default cpu)."""
+    parser.add_argument('--clock', choices=('cpu', 'wall'), default='cpu',
+                        help='time with this process\'s CPU time (default: steadier on a shared machine; '
+                             'PyBullet DIRECT steps in-process on one thread) or with wall time')
+
+
+def clock_of(name: str) -> Callable[[], float]:
+    """The clock function named by ``--clock``."""
+    return time.process_time if name == 'cpu' else time.perf_counter

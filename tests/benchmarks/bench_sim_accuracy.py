@@ -28,11 +28,12 @@ import math
 import sys
 import time
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import Progress, figure, machine_line, markdown_table, out_path, write_csv
+from _common import Progress, add_clock_argument, clock_of, figure, machine_line, markdown_table, out_path, write_csv
 from smarticle_driver.gait import GaitConfig
 from smarticle_sim.errors import SimTrouble
 from smarticle_sim.scenes import RobotPlacement, Scene, pair_scene
@@ -45,7 +46,8 @@ TOL_DRIFT_REL = 0.10
 TOL_R_BL = 0.02
 
 
-def run_pair(config: SimConfig, scene: Scene, periods: int, sample_every: int) -> dict[str, object]:
+def run_pair(config: SimConfig, scene: Scene, periods: int, sample_every: int,
+             clock: Callable[[], float] = time.perf_counter) -> dict[str, object]:
     """Run the pair; return xy at 1 and 10 periods, r samples, wall seconds per sim second, trouble."""
     bl = config.robot.body_length
     period = scene.robots[0].gait.period  # type: ignore[union-attr]
@@ -56,7 +58,7 @@ def run_pair(config: SimConfig, scene: Scene, periods: int, sample_every: int) -
         out: dict[str, object] = {'trouble': ''}
         rs = []
         world.start_gaits(0.0)
-        start = time.perf_counter()
+        start = clock()
         try:
             for i in range(1, ticks + 1):
                 world.tick()
@@ -67,7 +69,7 @@ def run_pair(config: SimConfig, scene: Scene, periods: int, sample_every: int) -
                         out[marks[i]] = poses[:, :2].copy()
         except SimTrouble as trouble:
             out['trouble'] = str(trouble)
-        wall = time.perf_counter() - start
+        wall = clock() - start
         out['wall_per_sim_s'] = wall / max(world.time, 1e-12)
         out['r'] = np.array(rs)
         return out
@@ -119,6 +121,7 @@ def main(argv: list[str] | None = None) -> int:
                              'quick: none)')
     parser.add_argument('--out-dir', type=Path, default=None, help='output folder (default out/benchmarks)')
     parser.add_argument('--no-progress', action='store_true')
+    add_clock_argument(parser)
     args = parser.parse_args(argv)
     rates = args.rates or ([240.0, 480.0, 960.0, 1920.0] if args.quick else [240.0, 480.0, 960.0, 1920.0, 3840.0])
     iterations = args.iterations or ([5, 10, 50] if args.quick else [5, 10, 20, 50])
@@ -128,6 +131,7 @@ def main(argv: list[str] | None = None) -> int:
     # one control tick for every setting, a whole number of steps at every rate: 1/60 s if possible
     tick = 1.0 / 60.0 if all(abs(r / 60.0 - round(r / 60.0)) < 1e-9 for r in rates) else 0.05
     base = SimConfig()
+    clock = clock_of(args.clock)
     default_rate, default_iters = 1.0 / base.physics.time_step, base.physics.solver_iterations
     gait = GaitConfig.from_degrees(args.alpha_max, servo_speed=base.robot.servo_speed)
     r0, th, ph, p1, p2 = args.pair
@@ -137,15 +141,15 @@ def main(argv: list[str] | None = None) -> int:
     ref_key = (max(rates), max(iterations))
     print(f'# run time against error: pair r={r0} theta={th} phi={ph} phases {p1} {p2}, alpha_max '
           f'{args.alpha_max:g} deg, {pair_periods} pair periods, {single_periods} single periods, control '
-          f'tick {tick:.4g} s; {machine_line()}')
+          f'tick {tick:.4g} s, {args.clock} time; {machine_line()}')
     progress = Progress(len(settings), 'accuracy', not args.no_progress)
     raw: dict[tuple[float, int], dict[str, object]] = {}
     # reference first, so a crash there shows at once
     for key in [ref_key] + [s for s in settings if s != ref_key]:
         rate, it = key
         config = base.with_physics(time_step=1.0 / rate, control_tick=tick, solver_iterations=it)
-        pair = run_pair(config, scene, pair_periods, sample_every)
-        again = run_pair(config, scene, pair_periods, sample_every)   # timing: best of two
+        pair = run_pair(config, scene, pair_periods, sample_every, clock)
+        again = run_pair(config, scene, pair_periods, sample_every, clock)   # timing: best of two
         pair['wall_per_sim_s'] = min(float(pair['wall_per_sim_s']), float(again['wall_per_sim_s']))  # type: ignore[arg-type]
         pair['repeatable'] = bool(np.array_equal(pair['r'], again['r']))  # type: ignore[arg-type]
         drift, single_trouble = run_single(config, gait, single_periods)

@@ -31,7 +31,7 @@ from typing import Callable
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import Progress, figure, machine_line, markdown_table, out_path, write_csv
+from _common import Progress, add_clock_argument, clock_of, figure, machine_line, markdown_table, out_path, write_csv
 from smarticle_driver.gait import GaitConfig
 from smarticle_sim.benchmark import bare_loop, batch_loop, world_loop
 from smarticle_sim.scenes import Scene, dense_scene, random_scene
@@ -53,15 +53,16 @@ def scene_for(kind: str, config: SimConfig, gait: GaitConfig, n: int, seed: int)
     return config.with_physics(plate_size=round(plate, 3)), scene
 
 
-def mode_fn(mode: str, config: SimConfig, scene: Scene, periods: float) -> Callable[[], tuple[int, float]]:
+def mode_fn(mode: str, config: SimConfig, scene: Scene, periods: float,
+            clock: Callable[[], float]) -> Callable[[], tuple[int, float]]:
     """A callable running ``mode`` once and returning (physics steps, wall seconds)."""
     if mode == 'raw':
-        return lambda: bare_loop(config, scene, periods)
+        return lambda: bare_loop(config, scene, periods, clock)
     if mode == 'world':
-        return lambda: world_loop(config, scene, periods)
+        return lambda: world_loop(config, scene, periods, clock)
     if mode == 'batch':
-        return lambda: batch_loop(config, scene, periods)
-    return lambda: batch_loop(config, scene, periods, 1, True)
+        return lambda: batch_loop(config, scene, periods, clock=clock)
+    return lambda: batch_loop(config, scene, periods, 1, True, clock)
 
 
 def best_of(fns: dict[str, Callable[[], tuple[int, float]]], repeats: int,
@@ -96,16 +97,18 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--skip-scale', action='store_true')
     parser.add_argument('--out-dir', type=Path, default=None)
     parser.add_argument('--no-progress', action='store_true')
+    add_clock_argument(parser)
     args = parser.parse_args(argv)
     budget = args.budget or (40000.0 if args.quick else 150000.0)
     repeats = args.repeats or (1 if args.quick else 2)
     p1_periods = args.p1_periods or (30.0 if args.quick else 300.0)
     base = SimConfig()
+    clock = clock_of(args.clock)
     gait = GaitConfig.from_degrees(90.0, servo_speed=base.robot.servo_speed)
     dt = base.physics.time_step
     steps_per_period = gait.period / dt
     print(f'# simulation cost against robot count; time step {dt:.6g} s, {base.physics.solver_iterations} '
-          f'solver iterations, best of {repeats} interleaved; {machine_line()}')
+          f'solver iterations, best of {repeats} interleaved, {args.clock} time; {machine_line()}')
     progress = Progress(len(args.robots) * repeats * (not args.skip_scale) + repeats * (not args.skip_p1),
                         'scale', not args.no_progress)
     rows: list[dict[str, object]] = []
@@ -113,7 +116,7 @@ def main(argv: list[str] | None = None) -> int:
         for n in args.robots:
             config, scene = scene_for(args.scene, base, gait, n, args.seed)
             periods = max(2.0, round(budget / (n * steps_per_period)))
-            best = best_of({m: mode_fn(m, config, scene, periods) for m in MODES}, repeats, progress,
+            best = best_of({m: mode_fn(m, config, scene, periods, clock) for m in MODES}, repeats, progress,
                            f'N={n} ({periods:g} periods)')
             raw_rate = best['raw'][0] / best['raw'][1]
             for mode in MODES:
@@ -144,9 +147,9 @@ def main(argv: list[str] | None = None) -> int:
     if not args.skip_p1:
         config = base
         scene = dense_scene(config.robot, gait, 7, seed=1)
-        best = best_of({'raw PyBullet loop': lambda: bare_loop(config, scene, p1_periods),
-                        'World.run, no recording': lambda: world_loop(config, scene, p1_periods),
-                        'batch core, CLI defaults': lambda: batch_loop(config, scene, p1_periods)},
+        best = best_of({'raw PyBullet loop': lambda: bare_loop(config, scene, p1_periods, clock),
+                        'World.run, no recording': lambda: world_loop(config, scene, p1_periods, clock),
+                        'batch core, CLI defaults': lambda: batch_loop(config, scene, p1_periods, clock=clock)},
                        repeats, progress, 'P1')
         raw_rate = best['raw PyBullet loop'][0] / best['raw PyBullet loop'][1]
         p1 = [{'mode': k, 'steps': s, 'wall_s': w, 'steps_per_s': s / w, 'real_time_factor': s * dt / w,

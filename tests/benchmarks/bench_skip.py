@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Callable
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import Progress, machine_line, markdown_table, out_path, write_csv
+from _common import Progress, add_clock_argument, clock_of, machine_line, markdown_table, out_path, write_csv
 from smarticle_driver.gait import GaitConfig
 from smarticle_sim.batch import scene_period
 from smarticle_sim.benchmark import bare_loop, batch_loop
@@ -37,13 +37,14 @@ Loop = Callable[[], tuple[int, float]]
 
 
 def world_with(config: SimConfig, scene: Scene, periods: float,
-               per_tick: Callable[[World], object] | None = None) -> tuple[int, float]:
+               per_tick: Callable[[World], object] | None = None,
+               clock: Callable[[], float] = time.perf_counter) -> tuple[int, float]:
     """World.tick loop calling ``per_tick(world)`` after every tick (e.g. an FSR read); timed."""
     with World(config, scene) as world:
         ticks = world.ticks_for(periods * scene_period(scene))
         world.start_gaits(0.0)
         tick = world.tick
-        start = time.perf_counter()
+        start = clock()
         if per_tick is None:
             for _ in range(ticks):
                 tick()
@@ -51,33 +52,36 @@ def world_with(config: SimConfig, scene: Scene, periods: float,
             for _ in range(ticks):
                 tick()
                 per_tick(world)
-        return world.step_count, time.perf_counter() - start
+        return world.step_count, clock() - start
 
 
-def variants(config: SimConfig, scene: Scene, periods: float) -> list[tuple[str, str, Loop]]:
+def variants(config: SimConfig, scene: Scene, periods: float,
+             clock: Callable[[], float]) -> list[tuple[str, str, Loop]]:
     """(group, name, loop) of every measured variant; the first two are the baselines."""
     one = [0]
+
+    def world(cfg: SimConfig = config, per_tick: Callable[[World], object] | None = None) -> Loop:
+        return lambda: world_with(cfg, scene, periods, per_tick, clock)
+
+    def batch(every: int | None = None, fsr: bool = False) -> Loop:
+        return lambda: batch_loop(config, scene, periods, every, fsr, clock)
+
     return [
-        ('baseline', 'raw PyBullet loop', lambda: bare_loop(config, scene, periods)),
-        ('baseline', 'World.run: no FSR, no recording', lambda: world_with(config, scene, periods)),
-        ('FSR (bridge, 60 Hz)', 'FSR for all robots every tick',
-         lambda: world_with(config, scene, periods, lambda w: w.fsr())),
-        ('FSR (bridge, 60 Hz)', 'FSR for 1 robot every tick',
-         lambda: world_with(config, scene, periods, lambda w: w.fsr(one))),
-        ('FSR (bridge, 60 Hz)', 'contact matrix every tick',
-         lambda: world_with(config, scene, periods, lambda w: w.robot_contacts())),
-        ('FSR (bridge, 60 Hz)', 'poses (state) every tick',
-         lambda: world_with(config, scene, periods, lambda w: w.state())),
-        ('batch recording', 'poses every tick (60 Hz)', lambda: batch_loop(config, scene, periods, 1)),
-        ('batch recording', 'poses every 3 ticks (20 Hz, default)', lambda: batch_loop(config, scene, periods)),
-        ('batch recording', 'poses every 6 ticks (10 Hz)', lambda: batch_loop(config, scene, periods, 6)),
-        ('batch recording', 'poses every 30 ticks (2 Hz)', lambda: batch_loop(config, scene, periods, 30)),
-        ('batch recording', 'poses+FSR+contacts every tick', lambda: batch_loop(config, scene, periods, 1, True)),
-        ('batch recording', 'poses+FSR+contacts at 20 Hz', lambda: batch_loop(config, scene, periods, None, True)),
-        ('trouble checks', 'every tick', lambda: world_with(config.with_physics(trouble_every=1), scene, periods)),
-        ('trouble checks', 'every 6 ticks (default)', lambda: world_with(config, scene, periods)),
-        ('trouble checks', 'every 60 ticks',
-         lambda: world_with(config.with_physics(trouble_every=60), scene, periods)),
+        ('baseline', 'raw PyBullet loop', lambda: bare_loop(config, scene, periods, clock)),
+        ('baseline', 'World.run: no FSR, no recording', world()),
+        ('FSR (bridge, 60 Hz)', 'FSR for all robots every tick', world(per_tick=lambda w: w.fsr())),
+        ('FSR (bridge, 60 Hz)', 'FSR for 1 robot every tick', world(per_tick=lambda w: w.fsr(one))),
+        ('FSR (bridge, 60 Hz)', 'contact matrix every tick', world(per_tick=lambda w: w.robot_contacts())),
+        ('FSR (bridge, 60 Hz)', 'ground-truth state every tick', world(per_tick=lambda w: w.state())),
+        ('batch recording', 'poses every tick (60 Hz)', batch(1)),
+        ('batch recording', 'poses every 3 ticks (20 Hz, default)', batch()),
+        ('batch recording', 'poses every 6 ticks (10 Hz)', batch(6)),
+        ('batch recording', 'poses every 30 ticks (2 Hz)', batch(30)),
+        ('batch recording', 'poses+FSR+contacts every tick', batch(1, True)),
+        ('batch recording', 'poses+FSR+contacts at 20 Hz', batch(None, True)),
+        ('trouble checks', 'every tick', world(config.with_physics(trouble_every=1))),
+        ('trouble checks', 'every 6 ticks (default)', world()),
+        ('trouble checks', 'every 60 ticks', world(config.with_physics(trouble_every=60))),
     ]
 
 
@@ -91,15 +95,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--seed', type=int, default=1)
     parser.add_argument('--out-dir', type=Path, default=None)
     parser.add_argument('--no-progress', action='store_true')
+    add_clock_argument(parser)
     args = parser.parse_args(argv)
     periods = args.periods or (10.0 if args.quick else 40.0)
     repeats = args.repeats or (2 if args.quick else 3)
     config = SimConfig()
     scene = dense_scene(config.robot, GaitConfig.from_degrees(90.0, servo_speed=config.robot.servo_speed),
                         args.robots, seed=args.seed)
-    runs = variants(config, scene, periods)
+    runs = variants(config, scene, periods, clock_of(args.clock))
     print(f'# skips: {args.robots} robots dense (seed {args.seed}), {periods:g} periods, best of {repeats} '
-          f'interleaved; {machine_line()}')
+          f'interleaved, {args.clock} time; {machine_line()}')
     progress = Progress(repeats, 'skip', not args.no_progress)
     best: dict[str, tuple[int, float]] = {}
     for rep in range(repeats):
