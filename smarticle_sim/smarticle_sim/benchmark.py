@@ -95,15 +95,16 @@ def batch_loop(config: SimConfig, scene: Scene, periods: float, sample_every: in
     return round(rec.time[-1] / config.physics.time_step), seconds
 
 
-def benchmark(config: SimConfig, scene: Scene, periods: float = 10.0, repeats: int = 3) -> list[BenchRow]:
+def benchmark(config: SimConfig, scene: Scene, periods: float = 10.0, repeats: int = 3,
+              clock: Clock = time.perf_counter) -> list[BenchRow]:
     """Time every mode ``repeats`` times, interleaved, and keep each mode's best run."""
     modes = {
-        'bare pybullet loop': lambda: bare_loop(config, scene, periods),
-        'World.run (gaits, trouble checks)': lambda: world_loop(config, scene, periods),
-        'batch default (poses at 20 Hz, no FSR)': lambda: batch_loop(config, scene, periods),
-        'batch, poses every tick, no FSR': lambda: batch_loop(config, scene, periods, 1, False),
-        'batch, poses+FSR+contacts at 20 Hz': lambda: batch_loop(config, scene, periods, None, True),
-        'batch, poses+FSR+contacts every tick': lambda: batch_loop(config, scene, periods, 1, True),
+        'bare pybullet loop': lambda: bare_loop(config, scene, periods, clock),
+        'World.run (gaits, trouble checks)': lambda: world_loop(config, scene, periods, clock),
+        'batch default (poses at 20 Hz, no FSR)': lambda: batch_loop(config, scene, periods, clock=clock),
+        'batch, poses every tick, no FSR': lambda: batch_loop(config, scene, periods, 1, False, clock),
+        'batch, poses+FSR+contacts at 20 Hz': lambda: batch_loop(config, scene, periods, None, True, clock),
+        'batch, poses+FSR+contacts every tick': lambda: batch_loop(config, scene, periods, 1, True, clock),
     }
     best: dict[str, tuple[int, float]] = {}
     for _ in range(repeats):

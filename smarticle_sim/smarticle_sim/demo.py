@@ -46,6 +46,7 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
 
     import rclpy
     from geometry_msgs.msg import PoseArray
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
     from smarticle_driver import topics
     from smarticle_driver.launching import ProcessGroup, isolated_ros_env
 
@@ -62,7 +63,8 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
 
     rclpy.init()
     node = rclpy.create_node('demo_listener')
-    node.create_subscription(PoseArray, topics.topic('poses'), on_poses, topics.qos_profile(topics.Qos.SENSOR))
+    deep = QoSProfile(depth=5000, reliability=ReliabilityPolicy.BEST_EFFORT)  # keep every sample we are sent
+    node.create_subscription(PoseArray, topics.topic('poses'), on_poses, deep)
     try:
         with ProcessGroup(log_dir, env) as group:
             common = ['-p', f'alpha_max_deg:={args.alpha_max}', '-p', f'period:={period}']

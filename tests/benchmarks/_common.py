@@ -42,7 +42,8 @@ def write_csv(path: Path, rows: Sequence[dict[str, Any]]) -> Path:
     with path.open('w', newline='') as handle:
         if not rows:
             return path
-        writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
+        names = list(dict.fromkeys(k for row in rows for k in row))
+        writer = csv.DictWriter(handle, fieldnames=names, restval='')
         writer.writeheader()
         for row in rows:
             writer.writerow({k: _csv_value(v) for k, v in row.items()})

@@ -91,7 +91,7 @@ def main(argv: list[str] | None = None) -> int:
                         help='robot-steps per scale run (default 150000, quick 40000); periods = budget / '
                              '(N x steps per period), at least 2')
     parser.add_argument('--p1-periods', type=float, default=None, help='P1 length (default 300, quick 30)')
-    parser.add_argument('--repeats', type=int, default=None, help='interleaved repeats (default 2, quick 1)')
+    parser.add_argument('--repeats', type=int, default=None, help='interleaved repeats (default 3, quick 1)')
     parser.add_argument('--seed', type=int, default=1)
     parser.add_argument('--skip-p1', action='store_true')
     parser.add_argument('--skip-scale', action='store_true')
@@ -100,7 +100,7 @@ def main(argv: list[str] | None = None) -> int:
     add_clock_argument(parser)
     args = parser.parse_args(argv)
     budget = args.budget or (40000.0 if args.quick else 150000.0)
-    repeats = args.repeats or (1 if args.quick else 2)
+    repeats = args.repeats or (1 if args.quick else 3)
     p1_periods = args.p1_periods or (30.0 if args.quick else 300.0)
     base = SimConfig()
     clock = clock_of(args.clock)
@@ -156,7 +156,7 @@ def main(argv: list[str] | None = None) -> int:
                'vs_raw': (s / w) / raw_rate - 1.0} for k, (s, w) in best.items()]
         print(f'\n## P1: 7 robots dense (seed 1), {p1_periods:g} periods ({p1_periods * gait.period:g} s '
               f'simulated), best of {repeats}')
-        print(markdown_table(p1, [('mode', 'mode', ''), ('wall_s', 'wall (s)', '.1f'),
+        print(markdown_table(p1, [('mode', 'mode', ''), ('wall_s', 'time (s)', '.1f'),
                                   ('steps_per_s', 'steps/s', ',.0f'), ('real_time_factor', 'x real time', '.1f'),
                                   ('vs_raw', 'vs raw', '+.1%')]))
         batch = p1[-1]

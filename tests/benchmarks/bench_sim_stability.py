@@ -4,7 +4,8 @@
 hold them) run up to ``--periods`` gait periods for every combination of physics time step (up to
 1/60 s, one step per control tick), gait amplitude alpha_max (up to 120 deg) and servo speed (x1, x3).
 The World's trouble checks run as usual (every ``trouble_every`` ticks); at each check this script also
-reads the ground truth and keeps: the largest contact penetration, the largest body speed, and an
+reads the ground truth and keeps (including the value that fired a SimTrouble): the largest contact
+penetration, the largest body speed, and an
 energy-like indicator (total translational kinetic energy of the bodies; its max, and the mean over
 the last quarter of the run against the first quarter: growth >> 1 would be runaway energy).
 
@@ -95,8 +96,12 @@ def run_setting(base: SimConfig, n: int, seed: int, rate: float, alpha_deg: floa
                     kes.append(ke)
                     ke_max = max(ke_max, ke)
         except SimTrouble as trouble:
-            quantity = trouble.quantity
-            outcome = 'NaN' if 'not finite' in str(trouble) else f'trouble: {quantity}'
+            quantity = trouble.quantity.split(' (')[0]
+            outcome = 'NaN' if 'not finite' in str(trouble) else f'trouble: {quantity} = {trouble.value:.4g}'
+            if 'penetration' in trouble.quantity and math.isfinite(trouble.value):
+                pen_max = max(pen_max, trouble.value)
+            if 'speed' in trouble.quantity and math.isfinite(trouble.value):
+                speed_max = max(speed_max, trouble.value)
             row.update(trouble_robot=trouble.robot, trouble_time_s=trouble.time, trouble_value=trouble.value)
         else:
             garbage = silent_garbage(world)
@@ -114,7 +119,7 @@ def run_setting(base: SimConfig, n: int, seed: int, rate: float, alpha_deg: floa
 def main(argv: list[str] | None = None) -> int:
     """Run the stress grid and print the table."""
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument('--quick', action='store_true', help='12 periods per setting instead of 300 (~1.5 min)')
+    parser.add_argument('--quick', action='store_true', help='10 periods per setting instead of 300 (~1.5 min)')
     parser.add_argument('--periods', type=float, default=None, help='gait periods per setting (default 300)')
     parser.add_argument('--robots', type=int, default=50)
     parser.add_argument('--rates', type=float, nargs='+', default=[240.0, 120.0, 60.0],
@@ -125,7 +130,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--out-dir', type=Path, default=None)
     parser.add_argument('--no-progress', action='store_true')
     args = parser.parse_args(argv)
-    periods = args.periods or (12.0 if args.quick else 300.0)
+    periods = args.periods or (10.0 if args.quick else 300.0)
     base = SimConfig()
     probe = dense_scene(base.robot, GaitConfig.from_degrees(90.0), args.robots, seed=args.seed)
     extent = max(max(abs(r.x), abs(r.y)) for r in probe.robots)

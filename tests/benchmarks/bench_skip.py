@@ -122,7 +122,7 @@ def main(argv: list[str] | None = None) -> int:
         per = wall / steps
         rows.append({'group': group, 'variant': name, 'wall_s': wall, 'real_time_factor': steps * dt / wall,
                      'cost_vs_world': per / world - 1.0, 'cost_vs_raw': per / raw - 1.0})
-    print(markdown_table(rows, [('group', 'group', ''), ('variant', 'variant', ''), ('wall_s', 'wall (s)', '.2f'),
+    print(markdown_table(rows, [('group', 'group', ''), ('variant', 'variant', ''), ('wall_s', 'time (s)', '.2f'),
                                 ('real_time_factor', 'x real time', '.1f'),
                                 ('cost_vs_world', 'extra time vs World.run', '+.1%'),
                                 ('cost_vs_raw', 'extra time vs raw', '+.1%')]))

@@ -18,6 +18,16 @@ from tests.conftest import spin_until
 ROOT = Path(__file__).resolve().parents[2]
 
 
+def _keep_all_sensor() -> object:
+    """Best-effort QoS (compatible with the sensor topics) with a reader history deep enough to lose nothing."""
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+
+    return QoSProfile(depth=5000, reliability=ReliabilityPolicy.BEST_EFFORT)
+
+
+KEEP_ALL_SENSOR = _keep_all_sensor()
+
+
 def test_shipped_yaml_equals_declared_defaults() -> None:
     shipped = read_defaults_yaml(str(ROOT / 'smarticle_sim' / 'config' / 'sim_bridge.yaml'), NODE_NAME)
     assert shipped == {spec.name: spec.default for spec in PARAMS}
@@ -96,13 +106,13 @@ def test_gait_nodes_drive_the_sim_in_lockstep_deterministically(nodes, ros_node)
             lambda m, poses=poses: poses.__setitem__(
                 m.header.stamp.sec * 10**9 + m.header.stamp.nanosec,
                 np.array([[p.position.x, p.position.y, p.orientation.z, p.orientation.w] for p in m.poses])),
-            topics.qos_profile(topics.Qos.SENSOR))
+            KEEP_ALL_SENSOR)
         if run == 0:
             node.create_subscription(
                 JointState, topics.topic('joint_states', 0),
                 lambda m: states.__setitem__(m.header.stamp.sec * 10**9 + m.header.stamp.nanosec,
                                              tuple(m.position)),
-                topics.qos_profile(topics.Qos.SENSOR))
+                KEEP_ALL_SENSOR)
         for k in range(2):
             nodes.start('gait', '--ros-args', '-p', f'robot_id:={k}', '-p', 'lockstep:=true',
                         '-p', 'use_sim_time:=true')
@@ -140,7 +150,7 @@ def test_bridge_core_and_ros_path_agree(nodes, ros_node) -> None:  # type: ignor
         PoseArray, topics.topic('poses'),
         lambda m: poses.__setitem__(m.header.stamp.sec * 10**9 + m.header.stamp.nanosec,
                                     np.array([[p.position.x, p.position.y] for p in m.poses])),
-        topics.qos_profile(topics.Qos.SENSOR))
+        KEEP_ALL_SENSOR)
     for k in range(2):
         nodes.start('gait', '--ros-args', '-p', f'robot_id:={k}', '-p', 'lockstep:=true', '-p', 'use_sim_time:=true')
     bridge = nodes.start('sim_bridge', '--ros-args', '-p', 'scene:=pair', '-p', f'duration:={duration}',
