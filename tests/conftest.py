@@ -8,16 +8,19 @@ from pathlib import Path
 from typing import Callable, Iterator
 
 import pytest
-from smarticle_driver.launching import ProcessGroup, executable
+from smarticle_driver.launching import DomainReservation, ProcessGroup, executable
 
 __all__ = ['executable', 'spin_until']
 
 ROOT = Path(__file__).resolve().parents[1]
+DOMAIN = pytest.StashKey[DomainReservation]()
 
 
 def pytest_configure(config: pytest.Config) -> None:
     """Give this test run its own DDS domain on localhost before anything starts rclpy."""
-    os.environ.setdefault('ROS_DOMAIN_ID', str(1 + os.getpid() % 100))
+    if 'ROS_DOMAIN_ID' not in os.environ:  # a domain no concurrent test run holds
+        config.stash[DOMAIN] = DomainReservation()
+        os.environ['ROS_DOMAIN_ID'] = str(config.stash[DOMAIN].domain_id)
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     os.environ.setdefault('RMW_IMPLEMENTATION', 'rmw_fastrtps_cpp')
     os.environ['PYTHONUNBUFFERED'] = '1'

@@ -26,6 +26,32 @@ def executable(name: str) -> str:
     return found
 
 
+class DomainReservation:
+    """A DDS domain id held for this process through an exclusive lock file (released on close or exit)."""
+
+    def __init__(self, first: int = 1, last: int = 101, lock_dir: str | None = None) -> None:
+        import fcntl
+        import tempfile
+
+        directory = Path(lock_dir or tempfile.gettempdir())
+        start = os.getpid() % (last - first + 1)
+        for offset in range(last - first + 1):
+            domain = first + (start + offset) % (last - first + 1)
+            handle = open(directory / f'smarticle-ros-domain-{domain}.lock', 'w')
+            try:
+                fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                handle.close()
+                continue
+            self.domain_id, self._handle = domain, handle
+            return
+        raise RuntimeError(f'every ROS domain id from {first} to {last} is in use by another run')
+
+    def close(self) -> None:
+        """Release the domain id."""
+        self._handle.close()
+
+
 def isolated_ros_env(domain_id: int | None = None) -> dict[str, str]:
     """Environment for a self-contained run: localhost-only discovery and its own DDS domain."""
     env = dict(os.environ)

@@ -48,9 +48,10 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
     from geometry_msgs.msg import PoseArray
     from rclpy.qos import QoSProfile, ReliabilityPolicy
     from smarticle_driver import topics
-    from smarticle_driver.launching import ProcessGroup, isolated_ros_env
+    from smarticle_driver.launching import DomainReservation, ProcessGroup, isolated_ros_env
 
-    env = isolated_ros_env()
+    reservation = None if 'ROS_DOMAIN_ID' in os.environ else DomainReservation()
+    env = isolated_ros_env(reservation.domain_id if reservation else None)
     os.environ.update({k: env[k] for k in ('ROS_DOMAIN_ID', 'ROS_AUTOMATIC_DISCOVERY_RANGE')})
     period = 1.6
     duration = START_AT + args.periods * period
@@ -95,6 +96,8 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
     finally:
         node.destroy_node()
         rclpy.try_shutdown()
+        if reservation is not None:
+            reservation.close()
     stamps = np.array(sorted(samples))
     raw = np.array([samples[s] for s in stamps])
     poses = np.concatenate([raw[..., :2], yaw(raw[..., 2], raw[..., 3])[..., None]], axis=-1)

@@ -175,9 +175,12 @@ class SimBridgeNode(Node):
         self.wait_for_subscribers(executor)
         wall0 = time.monotonic()
         self.publish_outputs()
+        first = True
         while rclpy.ok():
             if settings.lockstep:
                 self.wait_for_commands(executor)
+                if first:  # the real-time factor counts from the moment every gait node has answered
+                    wall0, first = time.monotonic(), False
             else:
                 for _ in range(self.core.n_robots + 4):
                     executor.spin_once(timeout_sec=0.0)
