@@ -25,7 +25,9 @@ setup(
     python_requires='>=3.10',
     entry_points={
         'console_scripts': [
-
+            'feedback = smarticle_feedback.feedback_node:main',
+            'smarticle-feedback-calibrate = smarticle_feedback.calibration:main',
+            'smarticle-feedback-p6 = smarticle_feedback.experiments:main',
         ],
     },
 )

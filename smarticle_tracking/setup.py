@@ -25,7 +25,9 @@ setup(
     python_requires='>=3.10',
     entry_points={
         'console_scripts': [
-
+            'tracker = smarticle_tracking.tracker_node:main',
+            'glider_monitor = smarticle_tracking.glider_monitor_node:main',
+            'tracker_calibrate = smarticle_tracking.calibrate_cli:entry',
         ],
     },
 )

@@ -23,6 +23,7 @@ from smarticle_driver.commands import CheckedCommand, check_command
 from smarticle_driver.gait import ALPHA_MAX_RANGE_DEG, GaitConfig
 from smarticle_driver.params import ParamSpec
 
+from .camera import BACKENDS, CameraConfig, OverheadCamera
 from .errors import ConfigError
 from .scenes import SCENE_KINDS, build_scene
 from .settings import PRESETS, PhysicsConfig, SimConfig
@@ -65,6 +66,23 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec('wait_for_subscribers', 0, 'before stepping, wait until /smarticles/poses has this many '
               'subscribers (lets a recorder or a test connect first)', 0, 100),
     ParamSpec('joint_limit_deg', 125.0, 'joint commands beyond +-this angle are clamped (deg)', 1.0, 180.0),
+    ParamSpec('camera_rate', 20.0, 'overhead frames per sim second, rendered only while '
+              '/overhead_camera/image_raw has subscribers (0 = no camera; at most 1 / publish_period)',
+              0.0, 1000.0),
+    ParamSpec('camera_width', 1920, 'overhead camera image width (px)', 16, 8192),
+    ParamSpec('camera_height', 1080, 'overhead camera image height (px)', 16, 8192),
+    ParamSpec('camera_view', 0.6, 'metres of the plate seen across the shorter image side', 0.01, 10.0),
+    ParamSpec('camera_elevation', 1.5, 'camera height above the plate (m)', 0.1, 100.0),
+    ParamSpec('camera_tag_size', 0.018, "side of each robot's ArUco tag (m); the tracker's tag_size", 0.001, 0.1),
+    ParamSpec('camera_dictionary', 'DICT_4X4_50', "ArUco dictionary of the tags (robot k carries tag k)"),
+    ParamSpec('camera_noise', 0.0, 'Gaussian pixel noise, standard deviation in grey levels', 0.0, 255.0),
+    ParamSpec('camera_blur', 0.0, 'Gaussian blur sigma (px)', 0.0, 50.0),
+    ParamSpec('camera_lighting', 0.0, 'uneven lighting: brightness loss from the centre to a corner '
+              '(fraction)', 0.0, 0.95),
+    ParamSpec('camera_backend', 'opencv', f'rendering path: {", ".join(BACKENDS)} (opencv is faster)'),
+    ParamSpec('camera_seed', 0, 'seed of the camera noise'),
+    ParamSpec('wait_for_camera_subscribers', 0, 'before stepping, also wait until /overhead_camera/image_raw '
+              'has this many subscribers', 0, 100),
 )
 
 
@@ -87,6 +105,9 @@ class BridgeSettings:
     noise_seed: int
     joint_limit: float
     wait_for_subscribers: int
+    camera: CameraConfig
+    camera_rate: float
+    wait_for_camera_subscribers: int
 
     @property
     def ticks_per_publish(self) -> int:
@@ -110,6 +131,18 @@ class BridgeSettings:
                                     control_tick=values['control_tick'],
                                     solver_iterations=values['solver_iterations'])
         gait = GaitConfig.from_degrees(values['alpha_max_deg'], values['period'], sim.robot.servo_speed)
+        try:
+            camera = CameraConfig(
+                width=values['camera_width'], height=values['camera_height'], view=values['camera_view'],
+                elevation=values['camera_elevation'], tag_size=values['camera_tag_size'],
+                dictionary=values['camera_dictionary'], noise=values['camera_noise'],
+                blur=values['camera_blur'], lighting=values['camera_lighting'], seed=values['camera_seed'],
+                backend=values['camera_backend'], plate_size=sim.physics.plate_size, robot=sim.robot)
+        except ConfigError as err:
+            raise ConfigError(f'{NODE_NAME} camera_* parameters: {err}') from err
+        if values['camera_rate'] * values['publish_period'] > 1.0 + 1e-9:
+            raise ConfigError(f'{NODE_NAME}.camera_rate {values["camera_rate"]} Hz is faster than the publish '
+                              f'period allows (at most {1.0 / values["publish_period"]:g} Hz)')
         settings = cls(
             sim, values['scene'], values['robots'], values['seed'], gait,
             (values['pair_r'], math.radians(values['pair_theta_deg']), math.radians(values['pair_phi_deg']),
@@ -117,7 +150,8 @@ class BridgeSettings:
             values['publish_period'], values['mode'] == 'lockstep', values['real_time_factor'],
             values['duration'], values['start_at'],
             (values['pose_noise_xy'], math.radians(values['pose_noise_heading_deg'])),
-            values['noise_seed'], math.radians(values['joint_limit_deg']), values['wait_for_subscribers'])
+            values['noise_seed'], math.radians(values['joint_limit_deg']), values['wait_for_subscribers'],
+            camera, values['camera_rate'], values['wait_for_camera_subscribers'])
         settings.ticks_per_publish  # noqa: B018 - validates publish_period against the control tick
         return settings
 
@@ -151,6 +185,8 @@ class SimBridgeCore:
         self._targets = self.world.arm_angles().copy()
         self._noise = np.random.default_rng(settings.noise_seed)
         self.ticks_per_publish = settings.ticks_per_publish
+        self._camera: OverheadCamera | None = None
+        self._next_frame_ns = 0
 
     @property
     def time(self) -> float:
@@ -193,6 +229,30 @@ class SimBridgeCore:
             return poses
         noise = self._noise.normal(size=poses.shape) * np.array([sigma_xy, sigma_xy, sigma_heading])
         return poses + noise
+
+    def frame_due(self) -> bool:
+        """True when the camera is on and the current sim time has reached the next frame time."""
+        return self.settings.camera_rate > 0.0 and self.time_ns >= self._next_frame_ns
+
+    def skip_frame(self) -> None:
+        """Schedule the next frame one camera period after the current time (whether rendered or not)."""
+        period_ns = round(1e9 / self.settings.camera_rate)
+        self._next_frame_ns = (self.time_ns // period_ns + 1) * period_ns
+
+    @property
+    def camera(self) -> OverheadCamera:
+        """The overhead camera (created at its first use, so a run without subscribers never loads OpenCV)."""
+        if self._camera is None:
+            self._camera = OverheadCamera(self.settings.camera)
+        return self._camera
+
+    def render_frame(self) -> np.ndarray:
+        """A mono8 overhead frame of the ground truth now (robots, arms, tags); schedules the next one."""
+        state = self.world.state()
+        frame = self.camera.render(state.poses, state.arm_angles, world=self.world)
+        if self.settings.camera_rate > 0.0:
+            self.skip_frame()
+        return frame
 
     def close(self) -> None:
         """Release the physics client."""

@@ -9,6 +9,7 @@ For every robot k it subscribes to ``/smarticle_<k>/joint_commands`` and publish
 
 from __future__ import annotations
 
+import array
 import math
 import re
 import time
@@ -66,6 +67,11 @@ class SimBridgeNode(Node):
         for k in range(n):
             self.create_subscription(self.JointState, topics.topic('joint_commands', k),
                                      lambda msg, k=k: self.on_command(k, msg), qos['joint_commands'])
+        # frames are published reliable (matches reliable and best-effort subscribers): a 2 MB frame is ~30
+        # UDP fragments, and over best effort one lost fragment loses the frame (docs/tracking.md)
+        self.image_pub = self.create_publisher(_msg('image_raw'), topics.topic('image_raw'),
+                                               topics.qos_profile(topics.Qos.COMMAND))
+        self.info_pub = self.create_publisher(_msg('camera_info'), topics.topic('camera_info'), qos['camera_info'])
         self.start_pub = None
         if self.settings.start_at >= 0.0:
             header = _msg('start')
@@ -145,6 +151,28 @@ class SimBridgeNode(Node):
                 msg.header = array.header
                 msg.pose = array.poses[k]
                 pub.publish(msg)
+        if self.core.frame_due():
+            if self.image_pub.get_subscription_count() > 0:
+                self.publish_frame(now)
+            else:
+                self.core.skip_frame()   # nobody watches: no rendering at all
+
+    def publish_frame(self, now: Any) -> None:
+        """Render the overhead frame and publish it (mono8) with its camera_info."""
+        frame = self.core.render_frame()
+        info = self.core.camera.camera_info()
+        image = _msg('image_raw')()
+        image.header.stamp = now
+        image.header.frame_id = topics.spec_of('image_raw').frame
+        image.height, image.width = frame.shape
+        image.encoding = 'mono8'
+        image.step = frame.shape[1]
+        image.data = array.array('B', frame.tobytes())
+        self.image_pub.publish(image)
+        camera_info = _msg('camera_info')(header=image.header, height=info.height, width=info.width,
+                                          distortion_model=info.distortion_model, d=info.d, k=info.k,
+                                          r=info.r, p=info.p)
+        self.info_pub.publish(camera_info)
 
     def _pose(self, xyh: Any) -> Any:
         """geometry_msgs/Pose of a planar pose (yaw = heading of the body normal)."""
@@ -210,11 +238,13 @@ class SimBridgeNode(Node):
     def wait_for_subscribers(self, executor: SingleThreadedExecutor) -> None:
         """Hold the start until /smarticles/poses has the configured number of subscribers."""
         started = time.monotonic()
-        while rclpy.ok() and self.poses_pub.get_subscription_count() < self.settings.wait_for_subscribers:
+        while rclpy.ok() and (
+                self.poses_pub.get_subscription_count() < self.settings.wait_for_subscribers
+                or self.image_pub.get_subscription_count() < self.settings.wait_for_camera_subscribers):
             executor.spin_once(timeout_sec=0.05)
             if time.monotonic() - started > 5.0:
-                self.get_logger().warning('waiting for subscribers of /smarticles/poses',
-                                          throttle_duration_sec=5.0)
+                self.get_logger().warning('waiting for subscribers of /smarticles/poses and '
+                                          '/overhead_camera/image_raw', throttle_duration_sec=5.0)
 
     def wait_for_commands(self, executor: SingleThreadedExecutor) -> None:
         """Lock-step barrier: spin until every robot's command for the current time has arrived."""

@@ -21,3 +21,19 @@ class GliderConfigError(GliderError):
 
 class MsdFitError(GliderError):
     """Too few usable MSD points to fit the exponent beta."""
+
+
+class TrackerError(TrackingError):
+    """Base class of the overhead-tracker errors."""
+
+
+class TrackerConfigError(TrackerError):
+    """An invalid tracker parameter (dictionary, tag ids, sizes)."""
+
+
+class TrackerInputError(TrackerError):
+    """A camera frame the tracker cannot use (encoding, size, shape)."""
+
+
+class CalibrationError(TrackerError):
+    """A missing, unreadable or unusable plane-homography calibration."""

@@ -152,12 +152,16 @@ def read_joints(reader: BagReader, topic: str) -> JointSeries:
 def read_robot_topic(reader: BagReader, key: str) -> dict[int, JointSeries]:
     """Return a per-robot JointState topic (``joint_states``, ``joint_commands``, ``fsr``) for every robot."""
     contract.spec_of(key)
-    found: dict[int, JointSeries] = {}
+    robots: dict[str, int] = {}
     for name in sorted(reader.topics):
         parsed = contract.parse_robot_topic(name)
         if parsed is not None and parsed[1] == key:
-            found[parsed[0]] = read_joints(reader, name)
-    return found
+            robots[name] = parsed[0]
+    items: dict[str, list[tuple[int, Any]]] = {name: [] for name in robots}
+    if robots:  # one pass over the bag for all robots (each pass decompresses every chunk)
+        for raw, msg in reader.decoded(list(robots)):
+            items[raw.topic].append((raw.log_time, msg))
+    return {robots[name]: joints_from_messages(items[name]) for name in sorted(robots, key=robots.get)}
 
 
 def read_fsr(reader: BagReader) -> dict[int, JointSeries]:

@@ -46,7 +46,9 @@ class RecorderNode(Node):
         """Subscribe to chosen topics that appeared since the last scan; warn about missing named ones."""
         chosen = self.config.filter.choose(self.get_topic_names_and_types())
         for name, type_name in chosen.items():
-            if name not in self.recording and name not in self.skipped:
+            # a topic seen only through its subscribers waits for a publisher: its QoS (latched,
+            # reliable) is not known before, and a latched message would be missed
+            if name not in self.recording and name not in self.skipped and self.count_publishers(name):
                 self.subscribe(name, type_name)
         missing = [t for t in self.config.filter.topics if t not in self.recording and t not in self.skipped]
         waited = time.monotonic() - self._created

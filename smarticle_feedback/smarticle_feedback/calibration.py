@@ -1,0 +1,190 @@
+"""Calibrate the impact window from a recorded run: per-face force distribution during collisions.
+
+Input: an npz of ``smarticle-sim run ... --fsr`` (``fsr`` (S, N, 4) newtons, ``contacts`` (S, N, N)),
+typically pairs in the C2 conformation (docs/feedback.md). A sample of robot k counts as "during a
+collision" when k touches another robot at that sample; of those, the forces above ``floor`` newtons on
+each face form that face's distribution. With ``c2_only`` (pair runs) only samples whose relative
+heading phi lies within ``c2_tolerance`` of 0 count. The suggested window is
+``[percentile(low), percentile(high)]`` of the pooled forces of all faces (the FSRs are the same part),
+by default P80 to the largest: the compression collision is the hard end of the distribution, the many
+light resting touches stay below f_min. The table shows each face too.
+Command line: ``smarticle-feedback-calibrate run.npz``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from smarticle_driver.topics import FSR_FACES
+
+from .errors import CalibrationInputError
+
+#: Forces below this (N) are contact noise, not impacts (the sim reports tiny resting forces).
+DEFAULT_FLOOR = 0.05
+
+
+@dataclass(frozen=True)
+class FaceStats:
+    """Distribution of one face's collision forces (N)."""
+
+    face: str
+    count: int
+    p05: float
+    p25: float
+    median: float
+    p75: float
+    p95: float
+    max: float
+
+
+@dataclass(frozen=True)
+class WindowSuggestion:
+    """Per-face statistics and the suggested impact window [f_min, f_max] (N)."""
+
+    faces: tuple[FaceStats, ...]
+    pooled: FaceStats
+    f_min: float
+    f_max: float
+    samples: int              # robot samples during collisions
+    forces: dict[str, np.ndarray]
+
+
+def collision_forces(fsr: np.ndarray, contacts: np.ndarray, floor: float = DEFAULT_FLOOR,
+                     keep: np.ndarray | None = None) -> tuple[dict[str, np.ndarray], int]:
+    """Per-face forces above ``floor`` at samples where the robot touches another one; and the sample count."""
+    fsr = np.asarray(fsr, dtype=float)
+    contacts = np.asarray(contacts, dtype=bool)
+    if fsr.ndim != 3 or fsr.shape[2] != len(FSR_FACES):
+        raise CalibrationInputError(f'fsr must have shape (samples, robots, {len(FSR_FACES)}), got {fsr.shape}')
+    if contacts.shape != fsr.shape[:2] + (fsr.shape[1],):
+        raise CalibrationInputError(f'contacts must have shape {fsr.shape[:2] + (fsr.shape[1],)}, '
+                                    f'got {contacts.shape}')
+    touching = contacts.any(axis=2)                         # (S, N)
+    if keep is not None:
+        touching &= np.asarray(keep, dtype=bool)[:, None]
+    picked = fsr[touching]                                  # (M, 4)
+    picked = picked[np.isfinite(picked).all(axis=1)]
+    out = {face: picked[:, i][picked[:, i] > floor] for i, face in enumerate(FSR_FACES)}
+    return out, int(touching.sum())
+
+
+def face_stats(face: str, values: np.ndarray) -> FaceStats:
+    """Percentiles of one set of forces (NaN when empty)."""
+    if values.size == 0:
+        return FaceStats(face, 0, *([math.nan] * 6))
+    p = np.percentile(values, [5, 25, 50, 75, 95])
+    return FaceStats(face, int(values.size), *(float(v) for v in p), float(values.max()))
+
+
+def suggest_window(forces: dict[str, np.ndarray], samples: int, low: float = 80.0,
+                   high: float = 100.0) -> WindowSuggestion:
+    """Statistics per face and pooled, and the window [P_low, P_high] of the pooled forces."""
+    if not (0.0 <= low < high <= 100.0):
+        raise CalibrationInputError(f'percentiles must satisfy 0 <= low < high <= 100, got {low}, {high}')
+    pooled = np.concatenate([forces[f] for f in FSR_FACES])
+    if pooled.size == 0:
+        raise CalibrationInputError('no collision forces in the recording: record with --fsr a run in '
+                                    'which the robots touch')
+    f_min, f_max = (float(v) for v in np.percentile(pooled, [low, high]))
+    return WindowSuggestion(tuple(face_stats(f, forces[f]) for f in FSR_FACES), face_stats('all', pooled),
+                            f_min, f_max, samples, forces)
+
+
+def c2_mask(poses: np.ndarray, tolerance: float) -> np.ndarray:
+    """Samples of a two-robot run whose relative heading phi lies within ``tolerance`` rad of 0."""
+    if poses.shape[1] != 2:
+        raise CalibrationInputError(f'--c2-only needs a two-robot (pair) run, got {poses.shape[1]} robots')
+    phi = poses[:, 1, 2] - poses[:, 0, 2]
+    return np.abs(np.angle(np.exp(1j * phi))) <= tolerance
+
+
+def calibrate_recording(path: str | Path, floor: float = DEFAULT_FLOOR, low: float = 80.0, high: float = 100.0,
+                        c2_only: bool = False, c2_tolerance: float = math.radians(45.0)) -> WindowSuggestion:
+    """Load an npz of ``smarticle-sim run --fsr`` and suggest an impact window."""
+    from smarticle_sim.batch import load_npz
+
+    rec = load_npz(path)
+    if not rec.meta.get('fsr_recorded') or not rec.meta.get('contacts_recorded'):
+        raise CalibrationInputError(f'{path}: FSR forces and contacts were not recorded; rerun '
+                                    '`smarticle-sim run ... --fsr`')
+    keep = c2_mask(rec.poses, c2_tolerance) if c2_only else None
+    forces, samples = collision_forces(rec.fsr, rec.contacts, floor, keep)
+    return suggest_window(forces, samples, low, high)
+
+
+def format_table(s: WindowSuggestion) -> str:
+    """Markdown table of the per-face distributions and the suggested window."""
+    rows = ['| face | n | p5 | p25 | median | p75 | p95 | max (N) |',
+            '| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |']
+    for st in (*s.faces, s.pooled):
+        rows.append(f'| {st.face} | {st.count} | {st.p05:.3f} | {st.p25:.3f} | {st.median:.3f} | {st.p75:.3f} | '
+                    f'{st.p95:.3f} | {st.max:.3f} |')
+    rows.append('')
+    rows.append(f'suggested impact window: f_min = {s.f_min:.3f} N, f_max = {s.f_max:.3f} N '
+                f'({s.samples} robot samples in contact)')
+    return '\n'.join(rows)
+
+
+def yaml_snippet(s: WindowSuggestion) -> str:
+    """The window as feedback node parameters (paste into config/feedback.yaml or pass with -p)."""
+    return ''.join(f'    {face}_min: {s.f_min:.3f}\n    {face}_max: {s.f_max:.3f}\n' for face in FSR_FACES)
+
+
+def plot_window(s: WindowSuggestion, path: str | Path, title: str = '') -> Path:
+    """Histograms of the per-face collision forces with the suggested window shaded (PNG, Agg)."""
+    import matplotlib
+
+    matplotlib.use('Agg')
+    from matplotlib.figure import Figure
+
+    path = Path(path)
+    fig = Figure(figsize=(9, 6), dpi=100)
+    top = max((float(v.max()) for v in s.forces.values() if v.size), default=1.0)
+    bins = np.linspace(0.0, top * 1.02, 40)
+    for i, face in enumerate(FSR_FACES):
+        ax = fig.add_subplot(2, 2, i + 1)
+        values = s.forces[face]
+        ax.hist(values, bins=bins, color='tab:blue', alpha=0.8)
+        ax.axvspan(s.f_min, s.f_max, color='tab:orange', alpha=0.2, label='impact window')
+        ax.set_title(f'{face} (n = {values.size})', fontsize=9)
+        ax.set_xlabel('force (N)')
+        ax.set_ylabel('samples')
+        if i == 0:
+            ax.legend(fontsize=8)
+    fig.suptitle(title or f'collision forces; window [{s.f_min:.2f}, {s.f_max:.2f}] N', fontsize=10)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    return path
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of `smarticle-feedback-calibrate`: table on stdout, PNG next to the input (or --png)."""
+    parser = argparse.ArgumentParser(prog='smarticle-feedback-calibrate', description=__doc__.split('\n')[0])
+    parser.add_argument('recording', help='npz written by `smarticle-sim run ... --fsr` (bags: not yet)')
+    parser.add_argument('--png', help='figure path (default: <recording>_window.png)')
+    parser.add_argument('--floor', type=float, default=DEFAULT_FLOOR, help='ignore forces below this (N)')
+    parser.add_argument('--low', type=float, default=80.0, help='percentile of f_min (default 80)')
+    parser.add_argument('--high', type=float, default=100.0, help='percentile of f_max (default 100 = the largest)')
+    parser.add_argument('--c2-only', action='store_true', help='pair runs: only samples with phi near 0')
+    args = parser.parse_args(argv)
+    try:
+        suggestion = calibrate_recording(args.recording, args.floor, args.low, args.high, args.c2_only)
+    except (CalibrationInputError, OSError, KeyError, ValueError) as err:
+        sys.stderr.write(f'smarticle-feedback-calibrate: {err}\n')
+        return 2
+    png = Path(args.png) if args.png else Path(args.recording).with_name(Path(args.recording).stem + '_window.png')
+    plot_window(suggestion, png, f'{Path(args.recording).name}: collision forces')
+    sys.stdout.write(format_table(suggestion) + '\n\nfeedback parameters:\n' + yaml_snippet(suggestion)
+                     + f'\nfigure: {png}\n')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,290 @@
+"""Paper P6 in simulation: C2 pairs of the `feedback` robot, open loop against impact-halt feedback.
+
+The batch core runs directly (no ROS): a ``World`` with its gait cores, FSR forces read every control
+tick for both robots and fed to one ``ImpactController`` per robot; when a controller says halt, the
+loop calls ``World.halt(k)`` before the next tick, so the in-process halt latency is at most one
+control tick. ``smarticle-feedback-p6 --quick`` runs a small version.
+
+Lifetime of a pair: the glider analysis of ``smarticle_tracking.gliders`` (``analyse_gliders`` with
+``min_periods = 1`` and ``r_bind`` in feedback-robot body lengths); the lifetime is the length of the
+bound run that starts in period 0 (0 if the pair is unbound in its first period), censored at the end
+of the trial.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+import sys
+import time
+from collections.abc import Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+from smarticle_driver.gait import GaitConfig
+
+from .controller import FeedbackConfig, ImpactController
+
+#: The C2 start found with pair_scene for the feedback robot (r in BL, theta, phi in deg, phases); docs/feedback.md.
+C2_START = (1.0, 240.0, 0.0, (0.0, 0.75))
+#: Seeded jitter of the start (r in BL, theta and phi in deg).
+C2_JITTER = (0.04, 4.0, 4.0)
+#: A pair counts as bound in a period in which r drops below this many body lengths.
+R_BIND_BL = 1.45
+
+
+@dataclass(frozen=True)
+class Condition:
+    """One arm of the experiment: amplitude (deg) and whether the feedback controller runs."""
+
+    alpha_max_deg: float
+    feedback: bool
+
+    @property
+    def label(self) -> str:
+        """Short name used in tables and figures."""
+        return f'{"feedback" if self.feedback else "open loop"} {self.alpha_max_deg:g} deg'
+
+
+@dataclass
+class PairTrial:
+    """Outcome of one pair trial."""
+
+    condition: Condition
+    seed: int
+    times: np.ndarray                  # (S,) s
+    r: np.ndarray                      # (S,) body lengths
+    phi: np.ndarray                    # (S,) rad
+    halts: list[tuple[float, int, str]] = field(default_factory=list)  # (time, robot, face)
+    lifetime_periods: int = 0
+    censored: bool = False
+    start: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    trouble: str = ''
+    wall: float = 0.0
+
+
+def c2_start(seed: int, base: tuple[float, float, float, tuple[float, float]] = C2_START,
+             jitter: tuple[float, float, float] = C2_JITTER) -> tuple[float, float, float]:
+    """The seed's start (r BL, theta deg, phi deg): ``base`` plus uniform jitter (seed 0 = ``base``)."""
+    r, theta, phi, _ = base
+    if seed == 0:
+        return (r, theta, phi)
+    u = np.random.default_rng(seed).uniform(-1.0, 1.0, size=3)
+    return (r + jitter[0] * u[0], theta + jitter[1] * u[1], phi + jitter[2] * u[2])
+
+
+def pair_lifetime(times: np.ndarray, poses: np.ndarray, period: float, body_length: float,
+                  r_bind_bl: float = R_BIND_BL, t0: float = 0.0) -> tuple[int, bool]:
+    """Bound periods from the start (glider analysis, K = 1) and whether the run lasted to the end."""
+    from smarticle_tracking.gliders import GliderConfig, analyse_gliders
+
+    cfg = GliderConfig(period=period, r_bind=r_bind_bl * body_length, min_periods=1,
+                       body_length=body_length, width=body_length)
+    analysis = analyse_gliders(times, poses, cfg, t0=t0)
+    first = [g for g in analysis.gliders if g.start_period == 0]
+    if not first:
+        return 0, False
+    return first[0].lifetime_periods, first[0].ongoing
+
+
+def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: FeedbackConfig | None = None,
+                   preset: str = 'feedback', start_time: float = 0.0,
+                   base: tuple[float, float, float, tuple[float, float]] = C2_START,
+                   r_bind_bl: float = R_BIND_BL, sample_every: int = 3) -> PairTrial:
+    """Run one C2 pair for ``periods`` gait periods, with the impact controller when ``condition.feedback``."""
+    from smarticle_sim.errors import SimTrouble
+    from smarticle_sim.scenes import pair_scene
+    from smarticle_sim.settings import SimConfig
+    from smarticle_sim.world import World
+    from smarticle_tracking.pairs import pair_coordinates
+
+    wall0 = time.perf_counter()
+    config = SimConfig.from_preset(preset)
+    gait = GaitConfig.from_degrees(condition.alpha_max_deg, servo_speed=config.robot.servo_speed)
+    r, theta, phi = c2_start(seed, base)
+    scene = pair_scene(config.robot, gait, r, math.radians(theta), math.radians(phi), phases=base[3])
+    controllers: list[ImpactController] = []
+    if condition.feedback:
+        fb = feedback or default_feedback_config()
+        controllers = [ImpactController(replace(fb, period=gait.period, phase=p)) for p in base[3]]
+        for c in controllers:
+            c.start(start_time)
+    trial = PairTrial(condition, seed, np.empty(0), np.empty(0), np.empty(0), start=(r, theta, phi))
+    with World(config, scene) as world:
+        ticks = world.ticks_for(start_time + periods * gait.period)
+        capacity = ticks // sample_every + 1
+        times = np.empty(capacity)
+        poses = np.empty((capacity, 2, 3))
+        taken = 0
+        world.start_gaits(start_time)
+        try:
+            for i in range(ticks + 1):
+                if i % sample_every == 0:
+                    times[taken], poses[taken] = world.time, world.poses()
+                    taken += 1
+                if controllers:
+                    forces = world.fsr([0, 1])
+                    for k, controller in enumerate(controllers):
+                        decision = controller.update(world.time, forces[k])
+                        if decision.halt and world.halt(k):
+                            trial.halts.append((world.time, k, decision.face or ''))
+                if i < ticks:
+                    world.tick()
+        except SimTrouble as trouble:
+            trial.trouble = str(trouble)
+    times, poses = times[:taken], poses[:taken]
+    coords = pair_coordinates(poses)
+    trial.times = times
+    trial.r = coords.r[:, 0] / config.robot.body_length
+    trial.phi = coords.phi[:, 0]
+    trial.lifetime_periods, trial.censored = pair_lifetime(times, poses, gait.period, config.robot.body_length,
+                                                          r_bind_bl, t0=start_time)
+    trial.wall = time.perf_counter() - wall0
+    return trial
+
+
+def default_feedback_config() -> FeedbackConfig:
+    """The controller config of the shipped defaults (config/feedback.yaml)."""
+    from .settings import config_from_values, default_values
+
+    return config_from_values(default_values())
+
+
+def _run(args: tuple[Condition, int, float]) -> PairTrial:
+    return run_pair_trial(*args)
+
+
+def run_p6(conditions: Sequence[Condition], seeds: Sequence[int], periods: float, jobs: int = 2,
+           progress: bool = True) -> list[PairTrial]:
+    """Every (condition, seed) trial, ``jobs`` processes in parallel (at most 2 on the shared machine)."""
+    work = [(c, s, periods) for c in conditions for s in seeds]
+    trials: list[PairTrial] = []
+    with ProcessPoolExecutor(max_workers=max(1, jobs)) as pool:
+        for trial in pool.map(_run, work):
+            trials.append(trial)
+            if progress:
+                sys.stderr.write(f'{trial.condition.label} seed {trial.seed}: lifetime {trial.lifetime_periods}'
+                                 f'{"+" if trial.censored else ""} periods, {len(trial.halts)} halts, '
+                                 f'{trial.wall:.1f} s\n')
+    return trials
+
+
+def summarize(trials: Sequence[PairTrial], periods: float) -> list[dict[str, object]]:
+    """One row per condition: n, mean lifetime and its standard error, median, censored count, halts."""
+    rows: list[dict[str, object]] = []
+    for cond in dict.fromkeys(t.condition for t in trials):
+        group = [t for t in trials if t.condition == cond]
+        life = np.array([t.lifetime_periods for t in group], dtype=float)
+        halts = np.array([len(t.halts) / max(periods, 1e-9) for t in group])
+        rows.append({'condition': cond.label, 'alpha_max_deg': cond.alpha_max_deg, 'feedback': cond.feedback,
+                     'n': len(group), 'mean_lifetime': float(life.mean()),
+                     'se_lifetime': float(life.std(ddof=1) / math.sqrt(len(life))) if len(life) > 1 else math.nan,
+                     'median_lifetime': float(np.median(life)),
+                     'censored': sum(t.censored for t in group), 'halts_per_period': float(halts.mean()),
+                     'trouble': sum(bool(t.trouble) for t in group)})
+    return rows
+
+
+def format_summary(rows: Sequence[dict[str, object]], periods: float) -> str:
+    """Markdown table of ``summarize`` rows."""
+    out = [f'| condition | n | lifetime mean +- SE (periods) | median | reached the end ({periods:g}) | '
+           'halts / period | trouble |', '| --- | ---: | ---: | ---: | ---: | ---: | ---: |']
+    for row in rows:
+        out.append(f'| {row["condition"]} | {row["n"]} | {row["mean_lifetime"]:.1f} +- {row["se_lifetime"]:.1f} | '
+                   f'{row["median_lifetime"]:.0f} | {row["censored"]} | {row["halts_per_period"]:.2f} | '
+                   f'{row["trouble"]} |')
+    return '\n'.join(out)
+
+
+def plot_traces(trials: Sequence[PairTrial], path: Path, seed: int = 0, period: float = 1.6) -> Path:
+    """r(t) of one seed for every condition (Fig. 5(c)); a vertical line marks the breakdown."""
+    import matplotlib
+
+    matplotlib.use('Agg')
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(8, 4.5), dpi=110)
+    ax = fig.add_subplot(1, 1, 1)
+    for t in (t for t in trials if t.seed == seed):
+        line, = ax.plot(t.times / period, t.r, lw=0.8, label=t.condition.label)
+        if not t.censored:
+            ax.axvline(t.lifetime_periods, color=line.get_color(), lw=1.5)
+    ax.axhline(R_BIND_BL, color='k', ls=':', lw=0.8, label=f'r_bind {R_BIND_BL:g} BL')
+    ax.set_xlabel('time (gait periods)')
+    ax.set_ylabel('r (BL)')
+    ax.set_title(f'C2 pair, seed {seed}: r(t); solid vertical lines = breakdown', fontsize=10)
+    ax.legend(fontsize=8)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    return path
+
+
+def plot_lifetimes(trials: Sequence[PairTrial], path: Path, periods: float) -> Path:
+    """Lifetime distributions per condition (Fig. 5(d)): points per seed, mean +- SE."""
+    import matplotlib
+
+    matplotlib.use('Agg')
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(7, 4.5), dpi=110)
+    ax = fig.add_subplot(1, 1, 1)
+    conds = list(dict.fromkeys(t.condition for t in trials))
+    rng = np.random.default_rng(0)
+    for x, cond in enumerate(conds):
+        life = np.array([t.lifetime_periods for t in trials if t.condition == cond], dtype=float)
+        ax.scatter(x + rng.uniform(-0.15, 0.15, life.size), life, s=12, alpha=0.6)
+        se = life.std(ddof=1) / math.sqrt(life.size) if life.size > 1 else 0.0
+        ax.errorbar(x + 0.3, life.mean(), yerr=se, fmt='s', color='k', capsize=4)
+    ax.axhline(periods, color='grey', ls=':', lw=0.8, label='end of trial')
+    ax.set_xticks(range(len(conds)), [c.label for c in conds], fontsize=8)
+    ax.set_ylabel('C2 lifetime (gait periods)')
+    ax.set_title('C2 pair lifetimes (points: seeds; squares: mean +- SE)', fontsize=10)
+    ax.legend(fontsize=8)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    return path
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of `smarticle-feedback-p6`: table on stdout, CSV and PNGs in --out."""
+    parser = argparse.ArgumentParser(prog='smarticle-feedback-p6', description=__doc__.split('\n')[0])
+    parser.add_argument('--seeds', type=int, default=20)
+    parser.add_argument('--periods', type=float, default=100.0)
+    parser.add_argument('--open-loop', type=float, nargs='+', default=[70.0, 80.0, 90.0],
+                        help='open-loop amplitudes (deg)')
+    parser.add_argument('--feedback', type=float, nargs='+', default=[90.0], help='feedback amplitudes (deg)')
+    parser.add_argument('--jobs', type=int, default=2, help='parallel processes (at most 2 here)')
+    parser.add_argument('--out', default='out/feedback', help='output folder')
+    parser.add_argument('--quick', action='store_true', help='3 seeds, 30 periods, open loop 90 vs feedback 90')
+    args = parser.parse_args(argv)
+    if args.quick:
+        args.seeds, args.periods, args.open_loop, args.feedback = 3, 30.0, [90.0], [90.0]
+    conditions = [Condition(a, False) for a in args.open_loop] + [Condition(a, True) for a in args.feedback]
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    wall = time.perf_counter()
+    trials = run_p6(conditions, range(args.seeds), args.periods, min(args.jobs, 2))
+    rows = summarize(trials, args.periods)
+    with (out / 'p6_trials.csv').open('w', newline='') as handle:
+        writer = csv.writer(handle)
+        writer.writerow(['condition', 'seed', 'r0_bl', 'theta0_deg', 'phi0_deg', 'lifetime_periods', 'censored',
+                         'halts', 'final_r_bl', 'trouble'])
+        for t in trials:
+            writer.writerow([t.condition.label, t.seed, f'{t.start[0]:.4f}', f'{t.start[1]:.2f}', f'{t.start[2]:.2f}',
+                             t.lifetime_periods, t.censored, len(t.halts), f'{t.r[-1]:.3f}', t.trouble])
+    with (out / 'p6_summary.csv').open('w', newline='') as handle:
+        writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    plot_traces(trials, out / 'p6_r_traces.png')
+    plot_lifetimes(trials, out / 'p6_lifetimes.png', args.periods)
+    sys.stdout.write(format_summary(rows, args.periods) + '\n')
+    sys.stdout.write(f'\n{len(trials)} trials in {time.perf_counter() - wall:.0f} s; files in {out}/\n')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

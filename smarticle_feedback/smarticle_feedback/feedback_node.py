@@ -1,0 +1,123 @@
+"""ROS node `feedback`: the impact-threshold controller of one robot, on hardware and in simulation alike.
+
+Subscribes ``/smarticle_<k>/fsr`` (sensor_msgs/JointState, effort = newtons) and ``/smarticles/start``;
+publishes ``/smarticle_<k>/halt`` (std_msgs/Header, stamp = the stamp of the triggering FSR sample,
+frame_id = the triggering face) and ``/diagnostics``. The node never asks where it runs: the servo
+bridge and the sim bridge publish the same FSR topic. See docs/feedback.md.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import rclpy
+from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.time import Time
+from smarticle_driver import topics
+from smarticle_driver.params import ParameterError, declare_and_read
+
+from .controller import ImpactController, check_sample
+from .errors import FsrSampleError
+from .settings import NODE_NAME, PARAMS, config_from_values
+
+
+def _msg(key: str) -> Any:
+    """Message class of contract entry ``key``."""
+    return topics.message_class(topics.spec_of(key).type)
+
+
+class FeedbackNode(Node):
+    """Thin ROS shell around smarticle_feedback.controller.ImpactController."""
+
+    def __init__(self) -> None:
+        super().__init__(NODE_NAME)
+        values = declare_and_read(self, PARAMS)
+        self.robot_id: int = values['robot_id']
+        self.controller = ImpactController(config_from_values(values))
+        self.bad: dict[str, int] = {}
+        self.last_problem = ''
+        self.Header, self.Diagnostics = _msg('halt'), _msg('diagnostics')
+        qos = {key: topics.qos_profile(topics.spec_of(key).qos) for key in ('fsr', 'halt', 'start', 'diagnostics')}
+        self.halt_pub = self.create_publisher(self.Header, topics.topic('halt', self.robot_id), qos['halt'])
+        self.diag_pub = self.create_publisher(self.Diagnostics, topics.topic('diagnostics'), qos['diagnostics'])
+        self.create_subscription(_msg('fsr'), topics.topic('fsr', self.robot_id), self.on_fsr, qos['fsr'])
+        self.create_subscription(self.Header, topics.topic('start'), self.on_start, qos['start'])
+        self.create_timer(values['diagnostics_period'], self.publish_diagnostics, clock=rclpy.clock.Clock())
+        cfg = self.controller.config
+        self.get_logger().info(
+            f'robot {self.robot_id}: faces {", ".join(cfg.enabled_faces) or "none"}; windows '
+            + ', '.join(f'[{w.f_min:g}, {w.f_max:g}] N' for w in cfg.windows)
+            + f'; debounce {cfg.debounce}; period {cfg.period:g} s')
+
+    def on_start(self, msg: Any) -> None:
+        """Take the gait start time (a zero stamp means now, as for the gait node)."""
+        stamp = Time.from_msg(msg.stamp).nanoseconds * 1e-9
+        self.controller.start(stamp if stamp > 0.0 else self.get_clock().now().nanoseconds * 1e-9)
+
+    def on_fsr(self, msg: Any) -> None:
+        """Check the sample, update the controller, publish a halt stamped with the sample's stamp."""
+        try:
+            sample = check_sample(list(msg.name), list(msg.effort))
+            for warning in sample.warnings:
+                self.report('bad_values', warning)
+            decision = self.controller.update(Time.from_msg(msg.header.stamp).nanoseconds * 1e-9,
+                                              sample.forces)
+        except FsrSampleError as err:
+            self.report(err.kind, str(err))
+            return
+        if decision.halt:
+            halt = self.Header()
+            halt.stamp = msg.header.stamp
+            halt.frame_id = decision.face or ''
+            self.halt_pub.publish(halt)
+
+    def report(self, kind: str, problem: str) -> None:
+        """Count a bad message and log it (throttled)."""
+        self.bad[kind] = self.bad.get(kind, 0) + 1
+        self.last_problem = problem
+        self.get_logger().warning(f'robot {self.robot_id}: {problem}', throttle_duration_sec=2.0)
+
+    def publish_diagnostics(self) -> None:
+        """Counters and the last problem on /diagnostics (WARN while bad messages arrive)."""
+        c = self.controller.counters
+        values = {'samples': c.samples, 'halts': c.halts, 'suppressed_impacts': c.suppressed,
+                  'before_start': c.before_start, 'bad_values': c.bad_values,
+                  **{f'in_window_{face}': n for face, n in zip(topics.FSR_FACES, c.in_window, strict=False)},
+                  **{k: v for k, v in self.bad.items() if k != 'bad_values'},
+                  'start_time': 'unknown' if self.controller.start_time is None else
+                  f'{self.controller.start_time:.3f}', 'last_problem': self.last_problem}
+        level = 1 if self.bad else 0
+        status = DiagnosticStatus(level=bytes([level]), name=f'smarticle_{self.robot_id}/{NODE_NAME}',
+                                  message='bad FSR messages' if self.bad else 'ok', hardware_id='')
+        status.values = [KeyValue(key=k, value=str(v)) for k, v in values.items()]
+        array = self.Diagnostics()
+        array.header.stamp = self.get_clock().now().to_msg()
+        array.status = [status]
+        self.diag_pub.publish(array)
+        self.bad = {}
+
+
+def main(args: list[str] | None = None) -> None:
+    """Entry point of `ros2 run smarticle_feedback feedback`."""
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = FeedbackNode()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except ParameterError as err:
+        if node is None:
+            rclpy.logging.get_logger(NODE_NAME).fatal(str(err))
+            raise SystemExit(2) from err
+        raise
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+
+
+if __name__ == '__main__':
+    main()

@@ -1,0 +1,68 @@
+"""Parameters of the `feedback` node, declared once (node and shipped ``config/feedback.yaml``).
+
+No rclpy here: tests, the batch experiments and the node all build the same ``FeedbackConfig`` from
+these values. One window per FSR face (``<face>_min``, ``<face>_max``, ``<face>_enabled``) so faces can
+be enabled one at a time; the default window is the one calibrated from simulated C2 collisions of the
+``feedback`` robot (docs/feedback.md).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from smarticle_driver import topics
+from smarticle_driver.gait import DEFAULT_PERIOD
+from smarticle_driver.params import ParameterError, ParamSpec
+
+from .controller import FeedbackConfig, ImpactWindow
+from .errors import FeedbackConfigError
+
+NODE_NAME = 'feedback'
+
+#: Default impact window (N), from `smarticle-feedback-calibrate` on simulated C2 collisions (docs/feedback.md).
+DEFAULT_F_MIN = 0.3
+DEFAULT_F_MAX = 6.0
+
+
+def _face_params() -> tuple[ParamSpec, ...]:
+    specs: list[ParamSpec] = []
+    for face in topics.FSR_FACES:
+        specs += [
+            ParamSpec(f'{face}_min', DEFAULT_F_MIN, f'impact window of {face}: lowest force (N)', 0.0, 1000.0),
+            ParamSpec(f'{face}_max', DEFAULT_F_MAX, f'impact window of {face}: highest force (N)', 0.0, 1000.0),
+            ParamSpec(f'{face}_enabled', True, f'whether an impact on {face} halts the arms'),
+        ]
+    return tuple(specs)
+
+
+PARAMS: tuple[ParamSpec, ...] = (
+    ParamSpec('robot_id', 0, 'robot id k: topics live under /smarticle_<k>', 0, topics.MAX_ROBOT_ID),
+    *_face_params(),
+    ParamSpec('debounce_samples', 1, 'consecutive FSR samples of one face inside its window that make an '
+              'impact', 1, 1000),
+    ParamSpec('period', DEFAULT_PERIOD, "gait period T (s): use the gait node's period; at most one halt "
+              'per period', 0.05, 60.0),
+    ParamSpec('phase', 0.0, "gait phase of this robot (fraction of a period): use the gait node's phase",
+              0.0, 0.999999),
+    ParamSpec('diagnostics_period', 1.0, 'seconds (wall) between /diagnostics messages', 0.05, 60.0),
+)
+
+
+def config_from_values(values: dict[str, Any]) -> FeedbackConfig:
+    """Build the controller config from checked parameter values; ParameterError says what is wrong."""
+    try:
+        windows = tuple(ImpactWindow(values[f'{face}_min'], values[f'{face}_max'], values[f'{face}_enabled'])
+                        for face in topics.FSR_FACES)
+        return FeedbackConfig(windows, values['debounce_samples'], values['period'], values['phase'])
+    except FeedbackConfigError as err:
+        raise ParameterError(f'node {NODE_NAME}: {err}') from err
+
+
+def default_values(**changes: Any) -> dict[str, Any]:
+    """The PARAMS defaults with some values changed (checked like the node checks them)."""
+    values = {spec.name: spec.default for spec in PARAMS}
+    unknown = set(changes) - set(values)
+    if unknown:
+        raise ParameterError(f'unknown {NODE_NAME} parameter(s): {", ".join(sorted(unknown))}')
+    values.update(changes)
+    return {spec.name: spec.check(values[spec.name], f'{NODE_NAME} parameter') for spec in PARAMS}

@@ -1,0 +1,197 @@
+"""ROS node `glider_monitor`: live bound pairs from /smarticles/poses, for operators and RViz/Foxglove.
+
+Subscribes ``/smarticles/poses`` (index = robot id; NaN position = not seen; yaw = heading of the body
+normal) and, with ``show_arms``, ``/smarticle_<k>/joint_states``. Feeds ``GliderMonitor`` (all maths
+there) and publishes, every ``publish_period`` of message time, ``/smarticles/gliders`` (one
+DiagnosticStatus per bound pair) and ``/smarticles/markers`` (robot outlines and glider bonds, from
+``markers.scene_markers``). Faults go to ``/diagnostics``. See docs/tracking.md.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+import numpy as np
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import Point
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.time import Time
+from smarticle_driver import topics
+from smarticle_driver.params import ParameterError, declare_and_read
+from std_msgs.msg import ColorRGBA
+from visualization_msgs.msg import Marker, MarkerArray
+
+from .errors import GliderError
+from .glider_monitor import BoundPair, GliderMonitor
+from .markers import MarkerShape, scene_markers
+from .settings import MONITOR_NODE, MONITOR_PARAMS, monitor_settings
+
+_KINDS = {'line_list': Marker.LINE_LIST, 'text': Marker.TEXT_VIEW_FACING}
+
+
+def planar_poses(msg: Any) -> np.ndarray:
+    """(N, 3) x, y, heading of a PoseArray; a non-finite position or orientation gives a NaN row."""
+    out = np.full((len(msg.poses), 3), np.nan)
+    for k, pose in enumerate(msg.poses):
+        p, q = pose.position, pose.orientation
+        heading = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+        row = (p.x, p.y, heading)
+        if all(math.isfinite(v) for v in row):
+            out[k] = row
+    return out
+
+
+def glider_status(pair: BoundPair, body_length: float) -> DiagnosticStatus:
+    """One DiagnosticStatus describing a bound pair (SI values, plus BL and degrees for people)."""
+    values = {
+        'i': str(pair.i), 'j': str(pair.j), 'class': pair.glider_class.value,
+        'r': f'{pair.r:.5f}', 'r_bl': f'{pair.r / body_length:.3f}',
+        'theta': f'{pair.theta:.4f}', 'theta_deg': f'{math.degrees(pair.theta):.1f}',
+        'phi': f'{pair.phi:.4f}', 'phi_deg': f'{math.degrees(pair.phi):.1f}',
+        'phi_mean_deg': f'{math.degrees(pair.phi_mean):.1f}',
+        'age': f'{pair.age:.3f}', 'age_periods': str(pair.age_periods),
+        'start_time': f'{pair.start_time:.3f}', 'is_glider': str(pair.is_glider).lower(),
+        'distance': f'{pair.distance:.5f}'}
+    return DiagnosticStatus(
+        level=DiagnosticStatus.OK, name=f'glider {pair.i}-{pair.j}', hardware_id=f'smarticles {pair.i} {pair.j}',
+        message=f'{pair.glider_class.value} bound {pair.age_periods} periods',
+        values=[KeyValue(key=k, value=v) for k, v in values.items()])
+
+
+def marker_message(shape: MarkerShape, header: Any) -> Marker:
+    """visualization_msgs/Marker of one MarkerShape."""
+    marker = Marker(header=header, ns=shape.ns, id=shape.id)
+    if shape.kind == 'delete_all':
+        marker.action = Marker.DELETEALL
+        return marker
+    marker.type = _KINDS[shape.kind]
+    marker.action = Marker.ADD
+    marker.pose.orientation.w = 1.0
+    marker.color = ColorRGBA(r=shape.rgba[0], g=shape.rgba[1], b=shape.rgba[2], a=shape.rgba[3])
+    if shape.kind == 'text':
+        x, y = shape.points[0]
+        marker.pose.position.x, marker.pose.position.y, marker.pose.position.z = x, y, 0.03
+        marker.scale.z = shape.width
+        marker.text = shape.text
+    else:
+        marker.scale.x = shape.width
+        marker.points = [Point(x=x, y=y, z=0.03) for x, y in shape.points]
+    return marker
+
+
+class GliderMonitorNode(Node):
+    """Thin ROS shell around GliderMonitor and scene_markers."""
+
+    def __init__(self) -> None:
+        super().__init__(MONITOR_NODE)
+        values = declare_and_read(self, MONITOR_PARAMS)
+        try:
+            self.settings = monitor_settings(values)
+        except ValueError as err:
+            raise ParameterError(f'node {MONITOR_NODE}: {err}') from err
+        self.monitor = GliderMonitor(self.settings.glider, self.settings.t0, self.settings.history)
+        qos = {key: topics.qos_profile(topics.spec_of(key).qos) for key in topics.BY_KEY}
+        self.gliders_pub = self.create_publisher(DiagnosticArray, topics.topic('gliders'), qos['gliders'])
+        self.markers_pub = self.create_publisher(MarkerArray, topics.topic('markers'), qos['markers'])
+        self.diag_pub = self.create_publisher(DiagnosticArray, topics.topic('diagnostics'), qos['diagnostics'])
+        self.create_subscription(topics.message_class(topics.spec_of('poses').type), topics.topic('poses'),
+                                 self.on_poses, qos['poses'])
+        self.arms = np.full((0, 2), np.nan)
+        self.counts: dict[str, int] = {}
+        self.last_logged: dict[str, float] = {}
+        self.last_report = -math.inf
+        self.bound: tuple[BoundPair, ...] = ()
+        self.create_timer(1.0, self.publish_diagnostics, clock=rclpy.clock.Clock())
+
+    def _count(self, key: str, text: str) -> None:
+        """Count a fault and log it (at most every 2 s per kind of fault)."""
+        self.counts[key] = self.counts.get(key, 0) + 1
+        now = time.monotonic()
+        if now - self.last_logged.get(key, -math.inf) >= 2.0:
+            self.last_logged[key] = now
+            self.get_logger().warning(text)
+
+    def _watch_arms(self, n_robots: int) -> None:
+        """Subscribe to the joint states of robots not yet watched (the team size is known from the poses)."""
+        start = len(self.arms)
+        if not self.settings.show_arms or n_robots <= start:
+            return
+        self.arms = np.vstack([self.arms, np.full((n_robots - start, 2), np.nan)])
+        joint_type = topics.message_class(topics.spec_of('joint_states').type)
+        qos = topics.qos_profile(topics.spec_of('joint_states').qos)
+        for k in range(start, n_robots):
+            self.create_subscription(joint_type, topics.topic('joint_states', k),
+                                     lambda msg, k=k: self.on_joint_state(k, msg), qos)
+
+    def on_joint_state(self, robot: int, msg: Any) -> None:
+        """Keep the latest arm angles of ``robot`` (joint names arm1, arm2)."""
+        angles = dict(zip(msg.name, msg.position))
+        self.arms[robot] = [angles.get(name, math.nan) for name in topics.JOINT_NAMES]
+
+    def on_poses(self, msg: Any) -> None:
+        """Feed one frame to the monitor and report at the publish period."""
+        stamp = Time.from_msg(msg.header.stamp).nanoseconds * 1e-9
+        poses = planar_poses(msg)
+        if len(poses) < 2:
+            self._count('bad_frames', f'/smarticles/poses holds {len(poses)} robot(s): need at least 2')
+            return
+        self._watch_arms(len(poses))
+        try:
+            self.bound = self.monitor.update(stamp, poses)
+        except GliderError as err:   # time went backwards (replay, sim restart) or the team changed
+            self._count('restarts', f'glider monitor restarted: {err}')
+            self.monitor.reset()
+            self.bound = self.monitor.update(stamp, poses)
+        period = self.settings.publish_period
+        if stamp - self.last_report >= period or stamp < self.last_report:
+            self.last_report = stamp
+            self.report(msg.header, poses)
+
+    def report(self, header: Any, poses: np.ndarray) -> None:
+        """Publish the bound pairs and the markers of this frame."""
+        bl = self.settings.glider.body_length
+        array = DiagnosticArray(header=header)
+        array.status = [glider_status(pair, bl) for pair in self.bound]
+        self.gliders_pub.publish(array)
+        arms = self.arms[:len(poses)] if self.settings.show_arms else None
+        shapes = scene_markers(poses, self.bound, arms, self.settings.dims, bl)
+        marker_header = type(header)(stamp=header.stamp, frame_id=topics.ARENA_FRAME)
+        self.markers_pub.publish(MarkerArray(markers=[marker_message(s, marker_header) for s in shapes]))
+
+    def publish_diagnostics(self) -> None:
+        """Publish the node's status and counters on /diagnostics."""
+        status = DiagnosticStatus(level=DiagnosticStatus.OK, name=MONITOR_NODE,
+                                  message=f'{len(self.bound)} bound pair(s)', hardware_id='')
+        status.values = [KeyValue(key=k, value=str(v)) for k, v in self.counts.items()]
+        array = DiagnosticArray(status=[status])
+        array.header.stamp = self.get_clock().now().to_msg()
+        self.diag_pub.publish(array)
+
+
+def main(args: list[str] | None = None) -> None:
+    """Entry point of `ros2 run smarticle_tracking glider_monitor`."""
+    rclpy.init(args=args)
+    node = None
+    code = 0
+    try:
+        node = GliderMonitorNode()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except ParameterError as err:
+        rclpy.logging.get_logger(MONITOR_NODE).fatal(str(err))
+        code = 2
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    if code:
+        raise SystemExit(code)
+
+
+if __name__ == '__main__':
+    main()

@@ -1,0 +1,170 @@
+"""ROS node `tracker`: overhead camera frames -> /smarticles/poses and /smarticle_<k>/pose.
+
+Subscribes ``/overhead_camera/image_raw`` and ``/overhead_camera/camera_info``; every frame gives
+exactly one PoseArray (index = robot id) stamped with the frame's stamp: a robot whose tag was not
+found, or was rejected, gets a NaN position (never an old pose), and so does every robot of a frame the
+tracker cannot use (unsupported encoding, wrong size for the calibration, no calibration). Problems
+are logged (throttled) and counted on /diagnostics; the node keeps running. See docs/tracking.md.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+import numpy as np
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import Pose, PoseArray, PoseStamped
+from rclpy.event_handler import PublisherEventCallbacks
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from smarticle_driver import topics
+from smarticle_driver.params import ParameterError, declare_and_read
+
+from .errors import CalibrationError, TrackerError
+from .settings import TRACKER_NODE, TRACKER_PARAMS, tracker_calibration, tracker_config
+from .tracker import TagTracker, image_from_buffer
+
+
+def pose_message(xyh: np.ndarray) -> Pose:
+    """geometry_msgs/Pose of a planar pose; a NaN pose keeps NaN position and a NaN orientation."""
+    pose = Pose()
+    x, y, heading = (float(v) for v in xyh)
+    pose.position.x, pose.position.y = x, y
+    pose.orientation.z, pose.orientation.w = math.sin(heading / 2.0), math.cos(heading / 2.0)
+    return pose
+
+
+class TrackerNode(Node):
+    """Thin ROS shell around TagTracker."""
+
+    def __init__(self) -> None:
+        super().__init__(TRACKER_NODE)
+        values = declare_and_read(self, TRACKER_PARAMS)
+        try:
+            self.config = tracker_config(values)
+        except ValueError as err:
+            raise ParameterError(f'node {TRACKER_NODE}: {err}') from err
+        self.tracker: TagTracker | None = None
+        self.calibration_problem = ''
+        try:
+            self.tracker = TagTracker(self.config, tracker_calibration(values))
+        except CalibrationError as err:   # keep running: frames are answered with missing poses
+            self.calibration_problem = str(err)
+            self.get_logger().error(f'no usable calibration, every robot will be reported missing: {err}')
+        qos = {key: topics.qos_profile(topics.spec_of(key).qos) for key in topics.BY_KEY}
+        quiet = PublisherEventCallbacks(use_default_callbacks=False)
+        n = self.config.n_robots
+        self.poses_pub = self.create_publisher(PoseArray, topics.topic('poses'), qos['poses'])
+        self.pose_pubs = [self.create_publisher(PoseStamped, topics.topic('pose', k), qos['pose'],
+                                                event_callbacks=quiet) for k in range(n)]
+        self.diag_pub = self.create_publisher(DiagnosticArray, topics.topic('diagnostics'), qos['diagnostics'])
+        image_type = topics.message_class(topics.spec_of('image_raw').type)
+        info_type = topics.message_class(topics.spec_of('camera_info').type)
+        image_qos = topics.qos_profile(topics.Qos.COMMAND) if values['image_reliable'] else qos['image_raw']
+        self.create_subscription(image_type, topics.topic('image_raw'), self.on_image, image_qos)
+        self.create_subscription(info_type, topics.topic('camera_info'), self.on_camera_info, qos['camera_info'])
+        self.camera_matrix: np.ndarray | None = None
+        self.dist_coeffs: np.ndarray | None = None
+        self.counts: dict[str, int] = {'frames': 0}
+        self.last_logged: dict[str, float] = {}
+        self.seen_total = 0
+        self.create_timer(1.0, self.publish_diagnostics, clock=rclpy.clock.Clock())
+        self.get_logger().info(f'tracking {n} robots (tags {list(self.config.tag_ids)}, {self.config.dictionary}, '
+                               f'{self.config.tag_size * 1000:.1f} mm)')
+
+    def _count(self, key: str, text: str, error: bool = False) -> None:
+        """Count a problem and log it (at most every 2 s per kind of problem)."""
+        self.counts[key] = self.counts.get(key, 0) + 1
+        now = time.monotonic()
+        if now - self.last_logged.get(key, -math.inf) >= 2.0:
+            self.last_logged[key] = now
+            (self.get_logger().error if error else self.get_logger().warning)(text)
+
+    def _count_logged(self, key: str, text: str) -> None:
+        """Log a per-frame problem already counted by the core (at most every 2 s per kind)."""
+        now = time.monotonic()
+        if now - self.last_logged.get(key, -math.inf) >= 2.0:
+            self.last_logged[key] = now
+            self.get_logger().warning(text)
+
+    def on_camera_info(self, msg: Any) -> None:
+        """Keep the intrinsics (used to undistort corners when the distortion is not zero)."""
+        k = np.asarray(msg.k, dtype=float)
+        d = np.asarray(msg.d, dtype=float)
+        if k.size == 9 and np.all(np.isfinite(k)) and k[0] > 0:
+            self.camera_matrix = k.reshape(3, 3)
+            self.dist_coeffs = d if d.size and np.any(d != 0.0) else None
+
+    def on_image(self, msg: Any) -> None:
+        """Track one frame and publish its poses (missing ones as NaN)."""
+        self.counts['frames'] += 1
+        n = self.config.n_robots
+        poses = np.full((n, 3), np.nan)
+        if self.tracker is None:
+            self._count('frames_without_calibration', f'frame dropped: {self.calibration_problem}', error=True)
+        else:
+            try:
+                grey = image_from_buffer(msg.encoding, msg.height, msg.width, msg.step, msg.data)
+                result = self.tracker.track(grey, self.camera_matrix, self.dist_coeffs)
+            except TrackerError as err:
+                self._count('bad_frames', f'frame not usable: {err}')
+            else:
+                poses = result.poses
+                self.seen_total += int(result.seen.sum())
+                for key, count in result.counts.items():
+                    self.counts[key] = self.counts.get(key, 0) + count
+                for key, problem in result.problems:
+                    self._count_logged(key, problem)
+        self.publish_poses(msg.header.stamp, poses)
+
+    def publish_poses(self, stamp: Any, poses: np.ndarray) -> None:
+        """Publish the PoseArray and each robot's PoseStamped (only for subscribed robots)."""
+        array = PoseArray()
+        array.header.stamp = stamp
+        array.header.frame_id = topics.ARENA_FRAME
+        array.poses = [pose_message(row) for row in poses]
+        self.poses_pub.publish(array)
+        for k, pub in enumerate(self.pose_pubs):
+            if pub.get_subscription_count() > 0:
+                pub.publish(PoseStamped(header=array.header, pose=array.poses[k]))
+
+    def publish_diagnostics(self) -> None:
+        """Publish status and counters on /diagnostics."""
+        frames = self.counts['frames']
+        level = DiagnosticStatus.ERROR if self.tracker is None else DiagnosticStatus.OK
+        message = self.calibration_problem or f'{frames} frames'
+        rate = self.seen_total / max(frames * self.config.n_robots, 1)
+        status = DiagnosticStatus(level=level, name=TRACKER_NODE, message=message, hardware_id='overhead_camera')
+        values = {**{k: str(v) for k, v in self.counts.items()}, 'detection_rate': f'{rate:.4f}'}
+        status.values = [KeyValue(key=k, value=v) for k, v in values.items()]
+        array = DiagnosticArray(status=[status])
+        array.header.stamp = self.get_clock().now().to_msg()
+        self.diag_pub.publish(array)
+
+
+def main(args: list[str] | None = None) -> None:
+    """Entry point of `ros2 run smarticle_tracking tracker`."""
+    rclpy.init(args=args)
+    node = None
+    code = 0
+    try:
+        node = TrackerNode()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except ParameterError as err:
+        rclpy.logging.get_logger(TRACKER_NODE).fatal(str(err))
+        code = 2
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    if code:
+        raise SystemExit(code)
+
+
+if __name__ == '__main__':
+    main()

@@ -1,0 +1,48 @@
+"""The hardware path over DDS and a real pty: an FSR impact on the emulated board halts the servos until the
+next gait period (servo_bridge, gait and feedback as separate processes; behaviour, not wall-clock time)."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Any
+
+from tests.conftest import spin_until
+from tests.smarticle_driver.fake_board_helpers import running_emulator
+
+from .hardware_rig import HardwareRig
+
+PERIOD = 0.8
+
+
+def test_an_fsr_impact_holds_the_emulated_servos_until_the_next_period(nodes: Any, ros_node: Any,
+                                                                        tmp_path: Path) -> None:
+    with running_emulator(tmp_path / 'maestro') as emulator:
+        probe = ros_node('feedback_hw_probe')
+        rig = HardwareRig(nodes, emulator, probe, period=PERIOD, alpha_max_deg=45.0)
+        logs = lambda: ''.join(nodes.output(p) for p in (rig.bridge, rig.gait, rig.feedback))  # noqa: E731
+        assert spin_until(probe, rig.ready, 20.0), logs()
+        t0 = rig.start(1.0)
+        # during period 2's first quarter arm 1 strokes from +45 to -45 degrees (0.15 s of a 0.2 s quarter)
+        spin_until(probe, lambda: time.time() >= rig.period_start(2) + 0.04, 10.0)
+        rig.pulse('arm1_front', 2.0)
+        assert spin_until(probe, lambda: len(rig.observed.halts) >= 1, 5.0), logs()
+        spin_until(probe, lambda: time.time() >= rig.period_start(3) + 0.1, 10.0)
+
+        stamp, _, face = rig.observed.halts[0]
+        assert face == 'arm1_front'
+        assert rig.period_start(2) <= stamp < rig.period_start(2) + 0.2, (stamp - t0)
+        hold = rig.targets_between(stamp, rig.period_start(3) - 0.05)
+        assert [r.channel for r in hold] == [0], f'one hold Set Target on arm 1, got {hold}'
+        corners = {1500.0 + 600.0 * a for a in (-0.7853981, 0.7853981)}
+        assert all(abs(hold[0].pulse_us - c) > 5.0 for c in corners), 'the hold target lies between the corners'
+        resumed = rig.targets_between(rig.period_start(3) - 0.05, rig.period_start(3) + 0.1)
+        assert any(r.channel == 0 for r in resumed), (
+            f'arm 1 resumes at the next period; targets after the hold: {rig.targets_between(stamp, time.time())}')
+        assert len(rig.observed.halts) == 1, 'one impact, one halt'
+
+
+def test_the_feedback_node_refuses_an_inverted_window(nodes: Any) -> None:
+    proc = nodes.start('feedback', '--ros-args', '-p', 'arm2_back_min:=5.0', '-p', 'arm2_back_max:=1.0')
+    assert proc.wait(timeout=20) == 2
+    assert 'f_min (5 N) is above f_max (1 N)' in nodes.output(proc)
