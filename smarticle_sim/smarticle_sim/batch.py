@@ -9,6 +9,7 @@ The npz format (``docs/sim_core.md``): S samples, N robots, arrays
 Samples are taken at ``DEFAULT_SAMPLE_RATE`` (20 Hz) unless asked otherwise; FSR and contacts are
 recorded only when asked (``record_fsr``, ``record_contacts``), so a default run costs little more than
 stepping (poses: two PyBullet calls per robot per sample, written into preallocated arrays).
+The heading follows ``World.poses`` (body normal, [-pi, pi)).
 * ``body_length`` () m; ``meta`` () JSON string of the settings, scene and outcome.
 """
 
@@ -26,7 +27,7 @@ from smarticle_driver.topics import FSR_FACES
 from .errors import SimError, SimTrouble
 from .scenes import Scene
 from .settings import SimConfig
-from .world import ARM_JOINTS, World, _heading_and_tilt
+from .world import ARM_JOINTS, World
 
 
 @dataclass
@@ -66,29 +67,34 @@ def default_sample_every(config: SimConfig, rate: float = DEFAULT_SAMPLE_RATE) -
 
 
 class _PoseReader:
-    """Reads body poses and arm angles of every robot into preallocated arrays (2 calls per robot)."""
+    """Reads body poses and arm angles of every robot: two PyBullet calls per robot, one array write.
+
+    The PyBullet calls are per robot anyway, so the heading is computed in the same pass with scalar
+    math (numpy ufuncs on arrays of a few robots cost more than they save), and each sample is written
+    into the preallocated recording arrays with one bulk assignment per array.
+    """
 
     def __init__(self, world: World) -> None:
         self._pose = world.client.getBasePositionAndOrientation
         self._joints = world.client.getJointStates
         self._bodies = world.body_ids
-        n = len(self._bodies)
-        self._xy = np.empty((n, 2))
-        self._quat = np.empty((n, 4))
-        self._arms = np.empty((n, 2))
 
     def read(self, poses: np.ndarray, arms: np.ndarray) -> None:
-        """Write (N, 3) x, y, heading into ``poses`` and (N, 2) arm angles into ``arms``."""
-        xy, quat, angles = self._xy, self._quat, self._arms
-        pose, joints = self._pose, self._joints
-        for k, body in enumerate(self._bodies):
-            pos, quat[k] = pose(body)
-            xy[k] = pos[0], pos[1]
-            (a1, _, _, _), (a2, _, _, _) = joints(body, ARM_JOINTS)
-            angles[k] = a1, a2
-        poses[:, :2] = xy
-        poses[:, 2] = _heading_and_tilt(quat)[0]
-        arms[...] = angles
+        """Write (N, 3) x, y, heading of the body normal into ``poses`` and (N, 2) alphas into ``arms``."""
+        pose, joints, atan2 = self._pose, self._joints, math.atan2
+        pose_rows, arm_rows = [], []
+        for body in self._bodies:
+            (x, y, _), (qx, qy, qz, qw) = pose(body)
+            yaw = atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+            pose_rows.append((x, y, (yaw + _HALF_PI + math.pi) % _TWO_PI - math.pi))
+            first, second = joints(body, ARM_JOINTS)
+            arm_rows.append((first[0], second[0]))
+        poses[...] = pose_rows
+        arms[...] = arm_rows
+
+
+_HALF_PI = math.pi / 2.0
+_TWO_PI = 2.0 * math.pi
 
 
 def run_trial(config: SimConfig, scene: Scene, periods: float, sample_every: int | None = None,

@@ -37,3 +37,11 @@ class TrackerInputError(TrackerError):
 
 class CalibrationError(TrackerError):
     """A missing, unreadable or unusable plane-homography calibration."""
+
+
+class FrameEncodingError(TrackerInputError):
+    """An image encoding the tracker does not read, or a malformed image buffer."""
+
+
+class FrameSizeError(TrackerInputError):
+    """A frame whose size differs from the calibration's."""

@@ -129,7 +129,7 @@ class GliderMonitorNode(Node):
 
     def on_joint_state(self, robot: int, msg: Any) -> None:
         """Keep the latest arm angles of ``robot`` (joint names arm1, arm2)."""
-        angles = dict(zip(msg.name, msg.position))
+        angles = dict(zip(msg.name, msg.position, strict=False))
         self.arms[robot] = [angles.get(name, math.nan) for name in topics.JOINT_NAMES]
 
     def on_poses(self, msg: Any) -> None:

@@ -68,7 +68,7 @@ def _rect(centre: np.ndarray, axis: np.ndarray, half_len: float, half_wid: float
 def _closed(corners: Sequence[np.ndarray]) -> list[Point]:
     """Segment endpoints (line list) of a closed polygon."""
     out: list[Point] = []
-    for a, b in zip(corners, [*corners[1:], corners[0]]):
+    for a, b in zip(corners, [*corners[1:], corners[0]], strict=True):
         out += [(float(a[0]), float(a[1])), (float(b[0]), float(b[1]))]
     return out
 

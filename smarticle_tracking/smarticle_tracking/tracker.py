@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .calibration import Calibration
-from .errors import TrackerConfigError, TrackerInputError
+from .errors import FrameEncodingError, FrameSizeError, TrackerConfigError, TrackerInputError
 
 FloatArray = NDArray[np.float64]
 
@@ -109,12 +109,12 @@ def image_from_buffer(encoding: str, height: int, width: int, step: int, data: b
 
     channels = ENCODINGS.get(encoding)
     if channels is None:
-        raise TrackerInputError(f'unsupported image encoding {encoding!r}; use one of {", ".join(ENCODINGS)}')
+        raise FrameEncodingError(f'unsupported image encoding {encoding!r}; use one of {", ".join(ENCODINGS)}')
     if height <= 0 or width <= 0 or step < width * channels:
-        raise TrackerInputError(f'image {width}x{height} {encoding} with step {step} is malformed')
+        raise FrameEncodingError(f'image {width}x{height} {encoding} with step {step} is malformed')
     buffer = np.frombuffer(data, dtype=np.uint8)
     if buffer.size < step * height:
-        raise TrackerInputError(f'image data has {buffer.size} bytes, {encoding} {width}x{height} '
+        raise FrameEncodingError(f'image data has {buffer.size} bytes, {encoding} {width}x{height} '
                                 f'with step {step} needs {step * height}')
     rows = buffer[:step * height].reshape(height, step)[:, :width * channels]
     if channels == 1:
@@ -225,7 +225,7 @@ class TagTracker:
         h, w = image.shape
         cal = self.calibration
         if (w, h) != (cal.width, cal.height):
-            raise TrackerInputError(f'frame is {w}x{h} px but the calibration is for {cal.width}x{cal.height}; '
+            raise FrameSizeError(f'frame is {w}x{h} px but the calibration is for {cal.width}x{cal.height}; '
                                     'recalibrate for this resolution (tracker_calibrate)')
         return image
 

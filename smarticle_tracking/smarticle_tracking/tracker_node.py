@@ -23,7 +23,7 @@ from rclpy.node import Node
 from smarticle_driver import topics
 from smarticle_driver.params import ParameterError, declare_and_read
 
-from .errors import CalibrationError, TrackerError
+from .errors import CalibrationError, FrameEncodingError, FrameSizeError, TrackerError
 from .settings import TRACKER_NODE, TRACKER_PARAMS, tracker_calibration, tracker_config
 from .tracker import TagTracker, image_from_buffer
 
@@ -109,6 +109,10 @@ class TrackerNode(Node):
             try:
                 grey = image_from_buffer(msg.encoding, msg.height, msg.width, msg.step, msg.data)
                 result = self.tracker.track(grey, self.camera_matrix, self.dist_coeffs)
+            except FrameEncodingError as err:
+                self._count('unsupported_frames', f'frame not usable: {err}')
+            except FrameSizeError as err:
+                self._count('wrong_size_frames', f'frame not usable: {err}')
             except TrackerError as err:
                 self._count('bad_frames', f'frame not usable: {err}')
             else:

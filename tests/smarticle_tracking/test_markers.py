@@ -48,7 +48,7 @@ def _bound_pairs() -> tuple[np.ndarray, tuple]:  # type: ignore[type-arg]
     times, poses = pair_scene(periods(6, 1, 5), phi=math.pi)
     monitor = GliderMonitor(GliderConfig(min_periods=3))
     bound: tuple = ()  # type: ignore[type-arg]
-    for t, frame in zip(times, poses):
+    for t, frame in zip(times, poses, strict=True):
         bound = monitor.update(t, frame)
     return poses[-1], bound
 
