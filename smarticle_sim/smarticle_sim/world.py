@@ -236,7 +236,8 @@ class World:
                 continue
             t = max(now, gait.start_time if gait.start_time is not None else now)
             command = gait.command(t + _TIME_EPS)
-            self._send(int(k), command.targets, command.speed)
+            if not command.halted:  # a halted robot keeps holding the angles it had when it stopped
+                self._send(int(k), command.targets, command.speed)
             tau = gait.gait_time(t + _TIME_EPS)
             next_tau = (math.floor(4.0 * tau) + 1) / 4.0
             cfg = gait.config
