@@ -40,6 +40,7 @@ class Qos(Enum):
     COMMAND = 'command'    # reliable, keep last 10: commands and events that must arrive
     LATCHED = 'latched'    # reliable, transient local, keep last 1: state a late joiner needs
     CLOCK = 'clock'        # best effort, keep last 1: rosgraph /clock as rclpy expects it
+    IMAGE = 'image'        # reliable, keep last 2: large frames (one lost UDP fragment loses a best-effort frame)
 
 
 @dataclass(frozen=True)
@@ -103,7 +104,7 @@ TOPICS: tuple[TopicSpec, ...] = (
     TopicSpec('start', '/smarticles/start', 'std_msgs/msg/Header', Qos.LATCHED,
               '', 's (stamp)', 'operator or test',
               'synchronised gait start: every gait node starts its period at header.stamp'),
-    TopicSpec('image_raw', '/overhead_camera/image_raw', 'sensor_msgs/msg/Image', Qos.SENSOR,
+    TopicSpec('image_raw', '/overhead_camera/image_raw', 'sensor_msgs/msg/Image', Qos.IMAGE,
               'overhead_camera', 'pixels', 'camera driver or sim (only when subscribed)',
               'overhead view of the arena'),
     TopicSpec('camera_info', '/overhead_camera/camera_info', 'sensor_msgs/msg/CameraInfo', Qos.SENSOR,
@@ -169,6 +170,10 @@ def qos_profile(kind: Qos) -> Any:
                           durability=DurabilityPolicy.VOLATILE)
     if kind is Qos.COMMAND:
         return QoSProfile(depth=10, history=HistoryPolicy.KEEP_LAST,
+                          reliability=ReliabilityPolicy.RELIABLE,
+                          durability=DurabilityPolicy.VOLATILE)
+    if kind is Qos.IMAGE:
+        return QoSProfile(depth=2, history=HistoryPolicy.KEEP_LAST,
                           reliability=ReliabilityPolicy.RELIABLE,
                           durability=DurabilityPolicy.VOLATILE)
     if kind is Qos.LATCHED:

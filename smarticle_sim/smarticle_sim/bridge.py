@@ -140,9 +140,6 @@ class BridgeSettings:
                 backend=values['camera_backend'], plate_size=sim.physics.plate_size, robot=sim.robot)
         except ConfigError as err:
             raise ConfigError(f'{NODE_NAME} camera_* parameters: {err}') from err
-        if values['camera_rate'] * values['publish_period'] > 1.0 + 1e-9:
-            raise ConfigError(f'{NODE_NAME}.camera_rate {values["camera_rate"]} Hz is faster than the publish '
-                              f'period allows (at most {1.0 / values["publish_period"]:g} Hz)')
         settings = cls(
             sim, values['scene'], values['robots'], values['seed'], gait,
             (values['pair_r'], math.radians(values['pair_theta_deg']), math.radians(values['pair_phi_deg']),
@@ -153,6 +150,9 @@ class BridgeSettings:
             values['noise_seed'], math.radians(values['joint_limit_deg']), values['wait_for_subscribers'],
             camera, values['camera_rate'], values['wait_for_camera_subscribers'])
         settings.ticks_per_publish  # noqa: B018 - validates publish_period against the control tick
+        if values['camera_rate'] * values['publish_period'] > 1.0 + 1e-9:
+            raise ConfigError(f'{NODE_NAME}.camera_rate {values["camera_rate"]} Hz is faster than the publish '
+                              f'period allows (at most {1.0 / values["publish_period"]:g} Hz)')
         return settings
 
     @classmethod

@@ -67,10 +67,9 @@ class SimBridgeNode(Node):
         for k in range(n):
             self.create_subscription(self.JointState, topics.topic('joint_commands', k),
                                      lambda msg, k=k: self.on_command(k, msg), qos['joint_commands'])
-        # frames are published reliable (matches reliable and best-effort subscribers): a 2 MB frame is ~30
-        # UDP fragments, and over best effort one lost fragment loses the frame (docs/tracking.md)
-        self.image_pub = self.create_publisher(_msg('image_raw'), topics.topic('image_raw'),
-                                               topics.qos_profile(topics.Qos.COMMAND))
+        # frames are published reliable (the contract's image QoS; it also serves best-effort subscribers):
+        # a 2 MB frame is ~30 UDP fragments, and over best effort one lost fragment loses it (docs/tracking.md)
+        self.image_pub = self.create_publisher(_msg('image_raw'), topics.topic('image_raw'), qos['image_raw'])
         self.info_pub = self.create_publisher(_msg('camera_info'), topics.topic('camera_info'), qos['camera_info'])
         self.start_pub = None
         if self.settings.start_at >= 0.0:

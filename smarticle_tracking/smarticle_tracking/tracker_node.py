@@ -63,7 +63,7 @@ class TrackerNode(Node):
         self.diag_pub = self.create_publisher(DiagnosticArray, topics.topic('diagnostics'), qos['diagnostics'])
         image_type = topics.message_class(topics.spec_of('image_raw').type)
         info_type = topics.message_class(topics.spec_of('camera_info').type)
-        image_qos = topics.qos_profile(topics.Qos.COMMAND) if values['image_reliable'] else qos['image_raw']
+        image_qos = qos['image_raw'] if values['image_reliable'] else topics.qos_profile(topics.Qos.SENSOR)
         self.create_subscription(image_type, topics.topic('image_raw'), self.on_image, image_qos)
         self.create_subscription(info_type, topics.topic('camera_info'), self.on_camera_info, qos['camera_info'])
         self.camera_matrix: np.ndarray | None = None
