@@ -1,15 +1,17 @@
 """The main demo: a sim-in-the-loop run of the stack with its default settings.
 
-Starts the sim bridge and one gait node per robot as separate processes talking over DDS (lock-step,
-so the run is reproducible), listens to ``/smarticles/poses`` like any other node would, then finds
-the gliders with the glider analysis core, prints a table and writes figures and the poses to
-``out/demo/``. Usage: ``./demo.sh [--robots 7] [--periods 100] [--alpha-max 90] [--seed 1]``.
+Starts the sim bridge, one gait node per robot, the live glider monitor and a bag recorder as separate
+processes talking over DDS (lock-step, so the physics is reproducible), listens to
+``/smarticles/poses`` like any other node would, then finds the gliders with the glider analysis core,
+prints a table and writes figures, the poses and an mcap bag to ``out/demo/``.
+Usage: ``./demo.sh [--robots 7] [--periods 100] [--alpha-max 90] [--seed 1]``.
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import shutil
 import sys
 import time
 from pathlib import Path
@@ -18,6 +20,7 @@ from typing import Any
 import numpy as np
 
 START_AT = 0.5  # sim time (s) of the synchronised gait start
+RECORDED = ('poses', 'clock', 'start', 'gliders', 'markers')  # contract keys of the topics the demo records
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -45,9 +48,11 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
     import os
 
     import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
     from geometry_msgs.msg import PoseArray
     from rclpy.qos import QoSProfile, ReliabilityPolicy
     from smarticle_driver import topics
+    from smarticle_bags.recording import start_recording
     from smarticle_driver.launching import DomainReservation, ProcessGroup, isolated_ros_env
 
     reservation = None if 'ROS_DOMAIN_ID' in os.environ else DomainReservation()
@@ -62,22 +67,37 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
         samples[stamp] = np.array([[p.position.x, p.position.y, p.orientation.z, p.orientation.w]
                                    for p in msg.poses])
 
+    live: dict[str, Any] = {}
+
+    def on_gliders(msg: Any) -> None:
+        live['gliders'] = msg
+
     rclpy.init()
     node = rclpy.create_node('demo_listener')
     deep = QoSProfile(depth=5000, reliability=ReliabilityPolicy.BEST_EFFORT)  # keep every sample we are sent
     node.create_subscription(PoseArray, topics.topic('poses'), on_poses, deep)
+    node.create_subscription(DiagnosticArray, topics.topic('gliders'), on_gliders,
+                             topics.qos_profile(topics.spec_of('gliders').qos))
+    bag = log_dir.parent / 'bag'
+    if bag.exists():
+        shutil.rmtree(bag)  # the previous demo run's bag
     try:
         with ProcessGroup(log_dir, env) as group:
             common = ['-p', f'alpha_max_deg:={args.alpha_max}', '-p', f'period:={period}']
             for k in range(args.robots):
                 group.start('gait', '--ros-args', '-p', f'robot_id:={k}', '-p', 'lockstep:=true',
                             '-p', 'use_sim_time:=true', *common)
+            group.start('glider_monitor', '--ros-args', '-p', 'use_sim_time:=true', '-p', f't0:={START_AT}',
+                        '-p', f'min_periods:={args.min_periods}', '-p', 'show_arms:=false')
+            recording = start_recording(group, bag, [topics.topic(key) for key in RECORDED])
+            recording.wait_subscribed(timeout=30.0)
             bridge = group.start('sim_bridge', '--ros-args', '-p', f'robots:={args.robots}',
                                  '-p', f'scene:={args.scene}', '-p', f'seed:={args.seed}',
                                  '-p', f'duration:={duration}', '-p', f'start_at:={START_AT}',
-                                 '-p', 'wait_for_subscribers:=1', *common)
-            print(f'[demo] sim bridge + {args.robots} gait nodes started (domain {env["ROS_DOMAIN_ID"]}, '
-                  f'logs in {log_dir}); simulating {args.periods:g} periods = {duration:.1f} s', flush=True)
+                                 '-p', 'wait_for_subscribers:=3', *common)
+            print(f'[demo] sim bridge + {args.robots} gait nodes + glider monitor + recorder started (domain '
+                  f'{env["ROS_DOMAIN_ID"]}, logs in {log_dir}); simulating {args.periods:g} periods = '
+                  f'{duration:.1f} s', flush=True)
             wall0 = time.monotonic()
             last = wall0
             while bridge.poll() is None:
@@ -93,6 +113,13 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
             if bridge.returncode != 0:
                 raise RuntimeError(f'sim bridge exited with code {bridge.returncode}:\n'
                                    + group.output(bridge)[-2000:])
+            info = recording.stop()
+            print(f'[demo] recorded {info.message_count} messages of {len(info.topics)} topics to {bag} '
+                  f'(smarticle-bag info {bag})')
+            report = live.get('gliders')
+            pairs = [status.name for status in report.status] if report is not None else []
+            print(f'[demo] live glider monitor, last report: {len(pairs)} bound pair(s) '
+                  + (', '.join(pairs) if pairs else ''))
     finally:
         node.destroy_node()
         rclpy.try_shutdown()

@@ -24,3 +24,9 @@ def test_demo_runs_the_stack_and_writes_its_outputs(tmp_path: Path) -> None:
     assert np.all(np.isfinite(data['poses']))
     assert (out / 'trajectories.png').stat().st_size > 10_000
     assert list((out / 'logs').glob('sim_bridge-*.log'))
+    assert 'live glider monitor, last report' in proc.stdout
+    from smarticle_bags.arrays import read_poses
+    from smarticle_bags.reader import BagReader
+
+    recorded = read_poses(BagReader(out / 'bag'))   # the bag holds the same poses the demo analysed
+    assert recorded.xyh.shape[1] == 3 and len(recorded.stamp) >= 0.9 * len(data['time'])
