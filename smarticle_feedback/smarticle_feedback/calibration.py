@@ -78,8 +78,8 @@ def face_stats(face: str, values: np.ndarray) -> FaceStats:
     """Percentiles of one set of forces (NaN when empty)."""
     if values.size == 0:
         return FaceStats(face, 0, *([math.nan] * 6))
-    p = np.percentile(values, [5, 25, 50, 75, 95])
-    return FaceStats(face, int(values.size), *(float(v) for v in p), float(values.max()))
+    p05, p25, median, p75, p95 = (float(v) for v in np.percentile(values, [5, 25, 50, 75, 95]))
+    return FaceStats(face, int(values.size), p05, p25, median, p75, p95, float(values.max()))
 
 
 def suggest_window(forces: dict[str, np.ndarray], samples: int, low: float = 80.0,
@@ -150,7 +150,7 @@ def plot_window(s: WindowSuggestion, path: str | Path, title: str = '') -> Path:
     for i, face in enumerate(FSR_FACES):
         ax = fig.add_subplot(2, 2, i + 1)
         values = s.forces[face]
-        ax.hist(values, bins=bins, color='tab:blue', alpha=0.8)
+        ax.hist(values, bins=bins.tolist(), color='tab:blue', alpha=0.8)
         ax.axvspan(s.f_min, s.f_max, color='tab:orange', alpha=0.2, label='impact window')
         ax.set_title(f'{face} (n = {values.size})', fontsize=9)
         ax.set_xlabel('force (N)')

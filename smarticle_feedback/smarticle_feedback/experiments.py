@@ -276,9 +276,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             writer.writerow([t.condition.label, t.seed, f'{t.start[0]:.4f}', f'{t.start[1]:.2f}', f'{t.start[2]:.2f}',
                              t.lifetime_periods, t.censored, len(t.halts), f'{t.r[-1]:.3f}', t.trouble])
     with (out / 'p6_summary.csv').open('w', newline='') as handle:
-        writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
+        summary_writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
+        summary_writer.writeheader()
+        summary_writer.writerows(rows)
     plot_traces(trials, out / 'p6_r_traces.png')
     plot_lifetimes(trials, out / 'p6_lifetimes.png', args.periods)
     sys.stdout.write(format_summary(rows, args.periods) + '\n')

@@ -416,7 +416,7 @@ class World:
                 client.disconnect()
             except pybullet.error:
                 pass
-            self._client = None  # type: ignore[assignment]
+            self._client = None
 
     def __enter__(self) -> World:
         """Context manager: the world closes on exit."""

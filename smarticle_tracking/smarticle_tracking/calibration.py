@@ -64,8 +64,9 @@ class Calibration:
         flat = pts.reshape(-1, 1, 2)
         if camera_matrix is not None and dist_coeffs is not None and np.any(np.asarray(dist_coeffs) != 0.0):
             k = np.asarray(camera_matrix, dtype=np.float64).reshape(3, 3)
-            flat = cv2.undistortPoints(flat, k, np.asarray(dist_coeffs, dtype=np.float64), P=k)
-        return cv2.perspectiveTransform(flat, self.homography).reshape(shape)
+            flat = np.asarray(cv2.undistortPoints(flat, k, np.asarray(dist_coeffs, dtype=np.float64), P=k),
+                              dtype=np.float64)
+        return np.asarray(cv2.perspectiveTransform(flat, self.homography), dtype=np.float64).reshape(shape)
 
 
 def fit_homography(pixels: FloatArray, arena: FloatArray) -> tuple[FloatArray, float]:
@@ -104,8 +105,8 @@ def calibrate(pixel_corners: FloatArray, ids: NDArray[np.int64], targets: Mappin
     px = np.asarray(pixel_corners, dtype=np.float64).reshape(-1, 4, 2)[used]
     if camera_matrix is not None and dist_coeffs is not None and np.any(np.asarray(dist_coeffs) != 0.0):
         k = np.asarray(camera_matrix, dtype=np.float64).reshape(3, 3)
-        px = cv2.undistortPoints(px.reshape(-1, 1, 2), k, np.asarray(dist_coeffs, dtype=np.float64),
-                                 P=k).reshape(-1, 4, 2)
+        px = np.asarray(cv2.undistortPoints(px.reshape(-1, 1, 2), k, np.asarray(dist_coeffs, dtype=np.float64),
+                                            P=k), dtype=np.float64).reshape(-1, 4, 2)
     poses = np.array([targets[ids_list[m]] for m in used], dtype=float)
     arena = tag_corners(poses, tag_size)
     h, rms = fit_homography(px.reshape(-1, 2), arena.reshape(-1, 2))

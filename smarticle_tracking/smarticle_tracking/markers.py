@@ -106,8 +106,7 @@ def scene_markers(poses: ArrayLike, bound: Sequence[BoundPair], arm_angles: Arra
         colour_of[pair.i] = colour_of[pair.j] = CLASS_COLOURS[pair.glider_class]
     shapes = [MarkerShape('', 0, 'delete_all', (), (0.0, 0.0, 0.0, 0.0))]
     seen = np.all(np.isfinite(arr), axis=1)
-    for k in np.flatnonzero(seen):
-        k = int(k)
+    for k in map(int, np.flatnonzero(seen)):
         outline = robot_outline(arr[k], None if arms is None or k >= len(arms) else arms[k], dims)
         shapes.append(MarkerShape('robots', k, 'line_list', outline, colour_of.get(k, ROBOT_COLOUR),
                                   OUTLINE_WIDTH))

@@ -122,7 +122,7 @@ def image_from_buffer(encoding: str, height: int, width: int, step: int, data: b
     pixels = rows.reshape(height, width, channels)
     code = {'bgr8': cv2.COLOR_BGR2GRAY, 'rgb8': cv2.COLOR_RGB2GRAY, 'bgra8': cv2.COLOR_BGRA2GRAY,
             'rgba8': cv2.COLOR_RGBA2GRAY}[encoding]
-    return cv2.cvtColor(pixels, code)
+    return np.asarray(cv2.cvtColor(pixels, code), dtype=np.uint8)
 
 
 class TagDetector:
@@ -221,7 +221,7 @@ class TagTracker:
         if image.ndim == 3:
             if image.shape[2] != 3:
                 raise TrackerInputError(f'a colour frame must have 3 channels (BGR), got {image.shape[2]}')
-            image = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
+            image = np.asarray(cv2.cvtColor(image, cv2.COLOR_BGR2GRAY), dtype=np.uint8)
         h, w = image.shape
         cal = self.calibration
         if (w, h) != (cal.width, cal.height):

@@ -161,7 +161,7 @@ def read_robot_topic(reader: BagReader, key: str) -> dict[int, JointSeries]:
     if robots:  # one pass over the bag for all robots (each pass decompresses every chunk)
         for raw, msg in reader.decoded(list(robots)):
             items[raw.topic].append((raw.log_time, msg))
-    return {robots[name]: joints_from_messages(items[name]) for name in sorted(robots, key=robots.get)}
+    return {robots[name]: joints_from_messages(items[name]) for name in sorted(robots, key=robots.__getitem__)}
 
 
 def read_fsr(reader: BagReader) -> dict[int, JointSeries]:

@@ -23,7 +23,7 @@ from typing import BinaryIO, Iterator
 from mcap.data_stream import ReadDataStream
 from mcap.exceptions import McapError
 from mcap.opcode import Opcode
-from mcap.records import Channel, Chunk, Header, Message, Schema, Statistics
+from mcap.records import Channel, Chunk, Header, McapRecord, Message, Schema, Statistics
 from mcap.stream_reader import breakup_chunk
 
 from .errors import CorruptBagError
@@ -185,7 +185,7 @@ def _count_by_reading(handle: BinaryIO, result: McapScan) -> None:
         result.start_time, result.end_time = min(times), max(times)
 
 
-def load_chunk(handle: BinaryIO, ref: ChunkRef, result: McapScan) -> list[object] | None:
+def load_chunk(handle: BinaryIO, ref: ChunkRef, result: McapScan) -> list[McapRecord] | None:
     """Return the records of one chunk (learning its schemas and channels), or None if it is damaged."""
     try:
         chunk = Chunk.read(_read_body(handle, ref.offset, ref.length - 9))
