@@ -10,6 +10,7 @@ Tables are printed; each experiment appends rows to ``out/calibration/<experimen
     .venv/bin/python smarticle_sim/benchmarks/calibrate.py knobs --periods 40
     .venv/bin/python smarticle_sim/benchmarks/calibrate.py dense --seeds 10 --periods 300
     .venv/bin/python smarticle_sim/benchmarks/calibrate.py dt --periods 40
+    .venv/bin/python smarticle_sim/benchmarks/calibrate.py phase --periods 100 --phase2 0.1
 
 Physics overrides for any experiment: ``--set friction_robot_robot=0.1 --set servo_torque=0.2`` (a
 PhysicsConfig or RobotSpec field); ``--servo-speed 7.854`` runs the gait at the paper's Chrono speed
@@ -171,15 +172,20 @@ def pair_job(args: tuple[dict, float, float, float, tuple[float, float], float, 
     t0 = time.perf_counter()
     rec = run_trial(config, scene, periods, sample_every=2, record_fsr=False, record_contacts=True)
     row.update(admissible=True, wall_s=time.perf_counter() - t0, **pair_metrics(config, rec, gait.period))
+    bl = config.robot.body_length
+    for frac in (0.25, 0.5, 0.75):   # phi along the run: does the pair settle or keep turning?
+        pc = pair_coordinates(rec.poses[int(frac * (len(rec.time) - 1)), 0],
+                              rec.poses[int(frac * (len(rec.time) - 1)), 1], bl)
+        row[f'phi_{round(100 * frac)}'] = math.degrees(pc.phi)
     return row
 
 
-def dense_job(args: tuple[dict, int, int, float, float | None]) -> dict[str, Any]:
+def dense_job(args: tuple[dict, int, int, float, float | None, float]) -> dict[str, Any]:
     """One dense 7-robot trial (paper P1): the longest glider and its class and travel."""
-    overrides, seed, periods, alpha, speed = args
+    overrides, seed, periods, alpha, speed, phase_jitter = args
     config = make_config(overrides)
     gait = make_gait(config, alpha, speed)
-    scene = dense_scene(config.robot, gait, n=7, seed=seed)
+    scene = dense_scene(config.robot, gait, n=7, seed=seed, phase_jitter=phase_jitter)
     t0 = time.perf_counter()
     rec = run_trial(config, scene, periods, sample_every=4, record_fsr=False, record_contacts=True)
     wall = time.perf_counter() - t0
@@ -391,15 +397,17 @@ def exp_knobs(args: argparse.Namespace) -> None:
 
 def exp_dense(args: argparse.Namespace) -> None:
     """P1 sample: dense 7-robot starts, ``--seeds`` seeds x ``--periods`` periods."""
-    jobs = [(args.overrides, seed, args.periods, args.alpha, args.servo_speed) for seed in range(args.seeds)]
+    jobs = [(args.overrides, seed, args.periods, args.alpha, args.servo_speed, args.phase_jitter)
+            for seed in range(args.seeds)]
     rows = run_jobs(dense_job, jobs, args.procs)
-    print(f'## P1 dense 7 robots, {args.seeds} seeds x {args.periods} periods ({args.label}); '
+    print(f'## P1 dense 7 robots, {args.seeds} seeds x {args.periods} periods ({args.label}, '
+          f'phase jitter {args.phase_jitter}); '
           'glider = bound >= 30 periods (contacts or r < 1.6 BL)')
     print_table(rows, ['seed', 'gliders_30', 'gliders_100', 'best_life', 'best_class', 'best_dist_W',
                        'best_phi', 'best_r_BL', 'c1_lives', 'c2_lives', 'x_real_time', 'trouble'])
     hits = sum(r['gliders_100'] > 0 for r in rows)
     print(f'trials with a pair bound >= 100 periods: {hits}/{len(rows)} (paper 97/151 = 64 %)')
-    print('csv:', write_csv('dense', rows, {'settings': args.label}))
+    print('csv:', write_csv('dense', rows, {'settings': args.label, 'phase_jitter': args.phase_jitter}))
     fig, ax = figure('dense')
     ax.scatter([r['best_life'] for r in rows], [r['best_dist_W'] for r in rows])
     ax.set_xlabel('longest glider lifetime (periods)')
@@ -431,8 +439,39 @@ def exp_dt(args: argparse.Namespace) -> None:
     print('png:', save(fig, 'dt'))
 
 
+#: Pair starts of the phase experiment: (r BL, theta deg, phi deg); C1-like then C2-like.
+PHASE_STARTS = [(1.3, t, p) for t in (0.0, 330.0, 340.0) for p in (170.0, 180.0, 190.0)] + \
+    [(1.3, t, p) for t in (30.0, 330.0) for p in (345.0, 15.0)]
+
+
+def exp_phase(args: argparse.Namespace) -> None:
+    """Pairs whose gaits are offset by a fraction of a period (the experiments' phase drift).
+
+    With equal phases a pair relaxes to a symmetric, stationary state; with robot 2 ``--phase2``
+    periods ahead (default 0.1) the symmetry is broken. Reports binding, class and travel while bound.
+    """
+    phases = [float(p) for p in args.phase2]
+    jobs = [(args.overrides, r, t, p, (0.0, ph), args.alpha, args.servo_speed, args.periods)
+            for ph in phases for r, t, p in PHASE_STARTS]
+    rows = [r for r in run_jobs(pair_job, jobs, args.procs) if r['admissible']]
+    cols = ['theta0', 'phi0', 'phase2', 'touch', 'tail', 'life', 'class', 'dist_W', 'late_W', 'r_end',
+            'phi_25', 'phi_50', 'phi_75', 'phi_end', 'trouble']
+    print(f'## phase-offset pairs, alpha_max {args.alpha}, {args.periods} periods ({args.label})')
+    print_table(rows, cols)
+    print('csv:', write_csv('phase', rows, {'settings': args.label, 'periods': args.periods}))
+    fig, ax = figure('phase')
+    for cls, colour in (('C1', 'tab:red'), ('C2', 'tab:blue'), ('unclassified', 'tab:gray'), ('', 'k')):
+        sel = [r for r in rows if r['class'] == cls]
+        ax.scatter([r['phase2'] for r in sel], [r['dist_W'] for r in sel], c=colour, label=cls or 'none')
+    ax.set_xlabel('phase of robot 2 (periods)')
+    ax.set_ylabel('distance travelled while bound (W)')
+    ax.set_title(f'phase-offset pairs, {args.periods} periods, {args.label}', fontsize=9)
+    ax.legend()
+    print('png:', save(fig, 'phase'))
+
+
 EXPERIMENTS = {'drift': exp_drift, 'pairs': exp_pairs, 'basin': exp_basin, 'knobs': exp_knobs,
-               'dense': exp_dense, 'dt': exp_dt}
+               'dense': exp_dense, 'dt': exp_dt, 'phase': exp_phase}
 
 
 def main() -> None:
@@ -445,6 +484,10 @@ def main() -> None:
                         help='gait servo speed (rad/s); default the robot spec (10.47)')
     parser.add_argument('--seeds', type=int, default=4)
     parser.add_argument('--step', type=float, default=30.0, help='basin grid step (deg)')
+    parser.add_argument('--phase2', nargs='+', default=['0.1'], metavar='P',
+                        help='phase experiment: gait phase(s) of robot 2 (periods)')
+    parser.add_argument('--phase-jitter', type=float, default=0.0,
+                        help='dense experiment: uniform gait-phase offsets in +-P periods (0: in phase)')
     parser.add_argument('--procs', type=int, default=2)
     parser.add_argument('--set', action='append', default=[], metavar='NAME=VALUE')
     args = parser.parse_args()

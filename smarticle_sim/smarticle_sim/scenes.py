@@ -93,22 +93,31 @@ def hex_points(n: int) -> np.ndarray:
 
 
 def dense_scene(spec: RobotSpec, gait: GaitConfig, n: int = 7, seed: int = 0,
-                gap: float = DEFAULT_GAP, jitter: float = 0.1) -> Scene:
-    """N robots densely packed (paper Fig. 1(c)): all in phase, random headings, lattice shrunk to touch.
+                gap: float = DEFAULT_GAP, jitter: float = 0.1, phase_jitter: float = 0.0) -> Scene:
+    """N robots densely packed (paper Fig. 1(c)): in phase, random headings, lattice shrunk to touch.
 
     The robots sit on a hexagonal lattice (jittered by ``jitter`` of the spacing) with seeded random
     headings; the spacing is the smallest, in 0.5 mm steps, at which no two footprints come closer
-    than ``gap``.
+    than ``gap``. ``phase_jitter`` (periods, default 0: exactly in phase) adds a seeded uniform offset in
+    [-phase_jitter, +phase_jitter] to each robot's gait phase, the sim's stand-in for the experiments'
+    phase drift (``docs/sim_calibration.md``: equal phases make bound pairs symmetric and stationary);
+    the first draws are unchanged, so a seed gives the same poses with or without it.
     """
+    if not (math.isfinite(phase_jitter) and 0.0 <= phase_jitter <= 0.5):
+        raise SceneError(f'dense_scene: phase_jitter must be in [0, 0.5] periods, got {phase_jitter!r}')
     rng = np.random.default_rng(seed)
     base = hex_points(n)
     offsets = rng.uniform(-jitter, jitter, size=(n, 2))
     headings = rng.uniform(-math.pi, math.pi, size=n)
+    gaits = [gait] * n
+    if phase_jitter > 0.0:
+        gaits = [GaitConfig(gait.alpha_max, gait.period, gait.servo_speed, (gait.phase + float(d)) % 1.0)
+                 for d in rng.uniform(-phase_jitter, phase_jitter, size=n)]
     spacing = spec.body_depth
     limit = 4.0 * spec.reach
     while spacing <= limit:
         pts = (base + offsets) * spacing
-        scene = Scene(tuple(_placement(p[0], p[1], h, gait) for p, h in zip(pts, headings, strict=True)),
+        scene = Scene(tuple(_placement(p[0], p[1], h, g) for p, h, g in zip(pts, headings, gaits, strict=True)),
                       name='dense', seed=seed)
         try:
             scene.validate(spec, math.inf, gap)

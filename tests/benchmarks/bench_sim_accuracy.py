@@ -242,7 +242,7 @@ def plot(rows: list[dict[str, object]], path: Path) -> Path:
                             xytext=(2, 2), textcoords='offset points')
         ax.set_xscale('log')
         ax.set_yscale('log')
-        ax.set_xlabel('wall s per simulated s')
+        ax.set_xlabel('time (s) per simulated s')
         ax.set_title(label, fontsize=9)
         ax.grid(True, which='both', lw=0.3)
         if idx == 0:

@@ -8,8 +8,9 @@ at the same area per robot) the same scene is run four ways, interleaved, best o
 * ``batch``: ``run_trial`` with its defaults (poses and arm angles at 20 Hz, no FSR);
 * ``batch+all``: ``run_trial`` recording poses, FSR and contacts every control tick.
 
-Reports the real-time factor and microseconds per robot-step, and fits cost ~ N^b (least squares on
-log wall-per-step against log N).
+Reports the real-time factor, microseconds per robot-step and, for the World-based modes, the time
+spent outside ``World.step`` within the same run (the steady measure of overhead on a shared
+machine), and fits cost ~ N^b (least squares on log time-per-step against log N).
 
 Part 2, P1: 7 robots dense (seed 1), 300 periods (``--quick``: 30), batch core with the CLI defaults
 against the raw loop of the same scene in the same run. Targets: >= 20x real time, within 10 % of raw.
@@ -31,13 +32,12 @@ from typing import Callable
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import Progress, add_clock_argument, clock_of, figure, machine_line, markdown_table, out_path, write_csv
+from _common import (PhysicsTimer, Progress, add_clock_argument, clock_of, figure, machine_line, markdown_table,
+                     out_path, write_csv)
 from smarticle_driver.gait import GaitConfig
-from smarticle_sim import batch as batch_module
 from smarticle_sim.benchmark import bare_loop, batch_loop, world_loop
 from smarticle_sim.scenes import Scene, dense_scene, random_scene
 from smarticle_sim.settings import SimConfig
-from smarticle_sim.world import World
 
 MODES = ('raw', 'world', 'batch', 'batch+all')
 
@@ -67,51 +67,22 @@ def mode_fn(mode: str, config: SimConfig, scene: Scene, periods: float,
     return lambda: batch_loop(config, scene, periods, 1, True, clock)
 
 
-def instrumented_batch(config: SimConfig, scene: Scene, periods: float,
-                       clock: Callable[[], float]) -> tuple[int, float, float]:
-    """``run_trial`` with CLI defaults, timing the stepSimulation calls inside it.
+def best_of(fns: dict[str, Callable[[], tuple[int, float]]], repeats: int, clock: Callable[[], float],
+            progress: Progress | None = None, label: str = '') -> dict[str, tuple[int, float, float]]:
+    """Run every callable ``repeats`` times, interleaved; keep each one's fastest run.
 
-    Returns (steps, total seconds, seconds inside stepSimulation): the raw stepping cost of the very
-    same trajectory, so total / in-step - 1 is the batch core's overhead with no run-to-run noise
-    from a different trajectory or a different moment on a shared machine.
+    Values: (steps, seconds, seconds inside World.step -- 0 for the raw loop, which has none).
     """
-    inside = [0.0]
-
-    class TimedWorld(World):
-        def __init__(self, *a: object, **k: object) -> None:
-            super().__init__(*a, **k)  # type: ignore[arg-type]
-            raw_step = self._client.stepSimulation
-
-            def step() -> None:
-                t0 = clock()
-                raw_step()
-                inside[0] += clock() - t0
-
-            self._client.stepSimulation = step  # type: ignore[method-assign]
-
-    saved = batch_module.World
-    batch_module.World = TimedWorld  # type: ignore[misc]
-    try:
-        start = clock()
-        rec = batch_module.run_trial(config, scene, periods)
-        total = clock() - start
-    finally:
-        batch_module.World = saved  # type: ignore[misc]
-    return round(rec.time[-1] / config.physics.time_step), total, inside[0]
-
-
-def best_of(fns: dict[str, Callable[[], tuple[int, float]]], repeats: int,
-            progress: Progress | None = None, label: str = '') -> dict[str, tuple[int, float]]:
-    """Run every callable ``repeats`` times, interleaved; keep each one's fastest run."""
-    best: dict[str, tuple[int, float]] = {}
+    best: dict[str, tuple[int, float, float]] = {}
     for rep in range(repeats):
         for name, fn in fns.items():
-            steps, seconds = fn()
+            with PhysicsTimer(clock) as timer:
+                steps, seconds = fn()
             if name not in best or seconds < best[name][1]:
-                best[name] = (steps, seconds)
+                best[name] = (steps, seconds, timer.inside)
         if progress is not None:
             progress.step(f'{label} repeat {rep + 1}: ' + ', '.join(
-                f'{k} {s / w:,.0f} steps/s' for k, (s, w) in best.items()))
+                f'{k} {s / w:,.0f} steps/s' for k, (s, w, _) in best.items()))
     return best
 
 
@@ -151,12 +122,13 @@ def main(argv: list[str] | None = None) -> int:
         for n in args.robots:
             config, scene = scene_for(args.scene, base, gait, n, args.seed)
             periods = max(2.0, round(budget / (n * steps_per_period)))
-            best = best_of({m: mode_fn(m, config, scene, periods, clock) for m in MODES}, repeats, progress,
+            best = best_of({m: mode_fn(m, config, scene, periods, clock) for m in MODES}, repeats, clock, progress,
                            f'N={n} ({periods:g} periods)')
             raw_rate = best['raw'][0] / best['raw'][1]
             for mode in MODES:
-                steps, wall = best[mode]
+                steps, wall, inside = best[mode]
                 rows.append({'robots': n, 'mode': mode, 'periods': periods, 'steps': steps, 'wall_s': wall,
+                             'outside_physics': wall / inside - 1.0 if inside > 0 else float('nan'),
                              'real_time_factor': steps * dt / wall, 'us_per_robot_step': 1e6 * wall / (steps * n),
                              'us_per_step': 1e6 * wall / steps,
                              'vs_raw': (steps / wall) / raw_rate - 1.0, 'plate_m': config.physics.plate_size})
@@ -164,7 +136,8 @@ def main(argv: list[str] | None = None) -> int:
         print(markdown_table(rows, [('robots', 'N', 'd'), ('mode', 'mode', ''), ('periods', 'periods', 'g'),
                                     ('real_time_factor', 'x real time', '.1f'),
                                     ('us_per_robot_step', 'us / robot-step', '.1f'),
-                                    ('vs_raw', 'vs raw', '+.1%')]))
+                                    ('vs_raw', 'vs raw (separate runs)', '+.1%'),
+                                    ('outside_physics', 'time outside stepSimulation', '+.1%')]))
         fits = []
         for mode in MODES:
             ns = np.array([r['robots'] for r in rows if r['mode'] == mode], dtype=float)
@@ -185,25 +158,20 @@ def main(argv: list[str] | None = None) -> int:
         best = best_of({'raw PyBullet loop': lambda: bare_loop(config, scene, p1_periods, clock),
                         'World.run, no recording': lambda: world_loop(config, scene, p1_periods, clock),
                         'batch core, CLI defaults': lambda: batch_loop(config, scene, p1_periods, clock=clock)},
-                       repeats, progress, 'P1')
+                       repeats, clock, progress, 'P1')
         raw_rate = best['raw PyBullet loop'][0] / best['raw PyBullet loop'][1]
         p1 = [{'mode': k, 'steps': s, 'wall_s': w, 'steps_per_s': s / w, 'real_time_factor': s * dt / w,
-               'vs_raw': (s / w) / raw_rate - 1.0} for k, (s, w) in best.items()]
+               'vs_raw': (s / w) / raw_rate - 1.0,
+               'overhead_outside_physics': w / i - 1.0 if i > 0 else float('nan')} for k, (s, w, i) in best.items()]
         print(f'\n## P1: 7 robots dense (seed 1), {p1_periods:g} periods ({p1_periods * gait.period:g} s '
               f'simulated), best of {repeats}')
         print(markdown_table(p1, [('mode', 'mode', ''), ('wall_s', 'time (s)', '.1f'),
                                   ('steps_per_s', 'steps/s', ',.0f'), ('real_time_factor', 'x real time', '.1f'),
-                                  ('vs_raw', 'vs raw', '+.1%')]))
+                                  ('vs_raw', 'vs raw (separate runs)', '+.1%'),
+                                  ('overhead_outside_physics', 'time outside stepSimulation', '+.1%')]))
         batch = p1[-1]
         rtf, gap = float(batch['real_time_factor']), float(batch['vs_raw'])
-        steps, total, inside = min((instrumented_batch(config, scene, p1_periods, clock) for _ in range(repeats)),
-                                   key=lambda t: t[1])
-        overhead = total / inside - 1.0
-        p1.append({'mode': 'batch core, time inside stepSimulation', 'steps': steps, 'wall_s': inside,
-                   'steps_per_s': steps / inside, 'real_time_factor': steps * dt / inside,
-                   'vs_raw': float('nan'), 'overhead_outside_physics': overhead})
-        print(f'batch core, instrumented: {total:.1f} s total, {inside:.1f} s inside stepSimulation: '
-              f'{overhead:+.1%} outside the physics (same trajectory)')
+        overhead = float(batch['overhead_outside_physics'])
         print(f'targets: >= 20x real time: {"met" if rtf >= 20 else "NOT met"} ({rtf:.1f}x); within 10 % of '
               f'raw stepping: {"met" if gap >= -0.10 else "NOT met"} ({gap:+.1%} against the raw loop, '
               f'{overhead:+.1%} against its own stepSimulation time)')

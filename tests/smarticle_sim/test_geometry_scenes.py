@@ -58,6 +58,19 @@ def test_dense_scene_is_seeded_packed_and_in_phase(gait90: GaitConfig) -> None:
     assert np.linalg.norm(centres, axis=1).max() < 3 * SMALL.body_length   # compressed
 
 
+def test_dense_scene_phase_jitter_is_seeded_and_bounded(gait90: GaitConfig) -> None:
+    a = dense_scene(SMALL, gait90, 7, seed=3, phase_jitter=0.1)
+    assert a == dense_scene(SMALL, gait90, 7, seed=3, phase_jitter=0.1)
+    a.validate(SMALL, 0.6)
+    phases = np.array([r.gait.phase for r in a.robots])   # type: ignore[union-attr]
+    offsets = (phases + 0.5) % 1.0 - 0.5
+    assert np.all(np.abs(offsets) <= 0.1) and len(set(phases.tolist())) == 7
+    plain = dense_scene(SMALL, gait90, 7, seed=3)
+    assert [r.heading for r in a.robots] == [r.heading for r in plain.robots]   # same headings per seed
+    with pytest.raises(SceneError, match='phase_jitter'):
+        dense_scene(SMALL, gait90, 7, seed=3, phase_jitter=0.7)
+
+
 def test_pair_scene_places_robot_two(gait90: GaitConfig) -> None:
     scene = pair_scene(SMALL, gait90, 1.6, math.radians(270), math.radians(180), phases=(0.0, 0.25))
     r1, r2 = scene.robots
