@@ -25,7 +25,7 @@ from smarticle_driver.params import ParamSpec
 
 from .camera import BACKENDS, CameraConfig, OverheadCamera
 from .errors import ConfigError
-from .scenes import SCENE_KINDS, build_scene
+from .scenes import SCENE_KINDS, Scene, build_scene
 from .settings import PRESETS, PhysicsConfig, SimConfig
 from .world import World
 
@@ -41,6 +41,9 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec('alpha_max_deg', 90.0, "amplitude of the robots' start shape in degrees: use the gait "
               "nodes' alpha_max_deg", ALPHA_MAX_RANGE_DEG[0], ALPHA_MAX_RANGE_DEG[1]),
     ParamSpec('period', 1.6, "gait period of the start shape (s): use the gait nodes' period", 0.05, 60.0),
+    ParamSpec('phase_jitter', 0.0, "dense scene: each robot's gait phase is offset by a seeded draw in "
+              "+-this many periods (a stand-in for the robots' phase drift); give every gait node its "
+              "robot's phase (BridgeSettings.scene() tells them; the demo does)", 0.0, 0.5),
     ParamSpec('pair_r', 1.3, 'pair scene: centre distance in body lengths', 0.1, 10.0),
     ParamSpec('pair_theta_deg', 0.0, "pair scene: polar angle of robot 1 from robot 0's body x axis (deg)"),
     ParamSpec('pair_phi_deg', 180.0, 'pair scene: heading of robot 1 minus heading of robot 0 (deg)'),
@@ -95,6 +98,7 @@ class BridgeSettings:
     robots: int
     seed: int
     gait: GaitConfig
+    phase_jitter: float
     pair: tuple[float, float, float, float, float]   # r (BL), theta (rad), phi (rad), phase 0, phase 1
     publish_period: float
     lockstep: bool
@@ -141,7 +145,7 @@ class BridgeSettings:
         except ConfigError as err:
             raise ConfigError(f'{NODE_NAME} camera_* parameters: {err}') from err
         settings = cls(
-            sim, values['scene'], values['robots'], values['seed'], gait,
+            sim, values['scene'], values['robots'], values['seed'], gait, values['phase_jitter'],
             (values['pair_r'], math.radians(values['pair_theta_deg']), math.radians(values['pair_phi_deg']),
              values['pair_phase_0'], values['pair_phase_1']),
             values['publish_period'], values['mode'] == 'lockstep', values['real_time_factor'],
@@ -154,6 +158,12 @@ class BridgeSettings:
             raise ConfigError(f'{NODE_NAME}.camera_rate {values["camera_rate"]} Hz is faster than the publish '
                               f'period allows (at most {1.0 / values["publish_period"]:g} Hz)')
         return settings
+
+    def scene(self) -> Scene:
+        """The scene these settings describe (robot placements and each robot's gait phase)."""
+        r, theta, phi, p0, p1 = self.pair
+        return build_scene(self.scene_kind, self.sim.robot, self.gait, self.robots, seed=self.seed, r=r,
+                           theta=theta, phi=phi, phases=(p0, p1), phase_jitter=self.phase_jitter)
 
     @classmethod
     def defaults(cls, **changes: Any) -> BridgeSettings:
@@ -173,9 +183,7 @@ class SimBridgeCore:
 
     def __init__(self, settings: BridgeSettings) -> None:
         self.settings = settings
-        r, theta, phi, p0, p1 = settings.pair
-        scene = build_scene(settings.scene_kind, settings.sim.robot, settings.gait, settings.robots,
-                            seed=settings.seed, r=r, theta=theta, phi=phi, phases=(p0, p1))
+        scene = settings.scene()
         self.world = World(settings.sim, scene)
         self.n_robots = self.world.n_robots
         for k in range(self.n_robots):

@@ -47,6 +47,8 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument('--phase', type=float, nargs=2, default=(0.0, 0.0), metavar=('P1', 'P2'),
                        help='pair: gait phases of robots 1 and 2 (fraction of a period)')
         p.add_argument('--random-phases', action='store_true', help='random: seeded random gait phases')
+        p.add_argument('--phase-jitter', type=float, default=0.0,
+                       help='dense: seeded gait-phase offsets in +-this many periods (default 0: in phase)')
     run.add_argument('--out', type=Path, default=Path('run.npz'), help='npz output file')
     run.add_argument('--png', type=Path, default=None, help='trajectory PNG (default: next to --out)')
     run.add_argument('--sample-every', type=int, default=None,
@@ -74,7 +76,8 @@ def scene_from_args(args: argparse.Namespace, config: SimConfig) -> Scene:
     gait = GaitConfig.from_degrees(args.alpha_max, period=args.period, servo_speed=config.robot.servo_speed)
     return build_scene(args.scene, config.robot, gait, args.robots, seed=args.seed, r=args.r,
                        theta=math.radians(args.theta), phi=math.radians(args.phi),
-                       phases=(args.phase[0], args.phase[1]), random_phases=args.random_phases)
+                       phases=(args.phase[0], args.phase[1]), random_phases=args.random_phases,
+                       phase_jitter=args.phase_jitter)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -32,6 +32,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--periods', type=float, default=100.0, help='gait periods to run (default 100)')
     parser.add_argument('--alpha-max', type=float, default=90.0, help='gait amplitude in degrees (default 90)')
     parser.add_argument('--seed', type=int, default=1, help='seed of the starting arrangement')
+    parser.add_argument('--phase-jitter', type=float, default=0.1,
+                        help='dense scene: seeded gait-phase offsets in +-this many periods, a stand-in for the '
+                             "real robots' phase drift (default 0.1; 0 = perfectly in phase, where the sim's "
+                             'pairs bind but do not glide: docs/sim_calibration.md)')
     parser.add_argument('--min-periods', type=int, default=30,
                         help='a pair bound this many periods is a glider (default 30, as in the paper)')
     parser.add_argument('--out', type=Path, default=Path('out/demo'), help='output folder')
@@ -54,6 +58,8 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
     from smarticle_driver import topics
     from smarticle_bags.recording import start_recording
     from smarticle_driver.launching import DomainReservation, ProcessGroup, isolated_ros_env
+
+    from .bridge import BridgeSettings
 
     reservation = None if 'ROS_DOMAIN_ID' in os.environ else DomainReservation()
     env = isolated_ros_env(reservation.domain_id if reservation else None)
@@ -84,15 +90,18 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
     try:
         with ProcessGroup(log_dir, env) as group:
             common = ['-p', f'alpha_max_deg:={args.alpha_max}', '-p', f'period:={period}']
+            scene = {'robots': args.robots, 'scene': args.scene, 'seed': args.seed, 'phase_jitter': args.phase_jitter}
+            scene_args = [arg for key, value in scene.items() for arg in ('-p', f'{key}:={value}')]
+            robots = BridgeSettings.defaults(alpha_max_deg=args.alpha_max, **scene).scene().robots  # their phases
             for k in range(args.robots):
+                phase = robots[k].gait.phase if robots[k].gait is not None else 0.0
                 group.start('gait', '--ros-args', '-p', f'robot_id:={k}', '-p', 'lockstep:=true',
-                            '-p', 'use_sim_time:=true', *common)
+                            '-p', 'use_sim_time:=true', '-p', f'phase:={phase!r}', *common)
             group.start('glider_monitor', '--ros-args', '-p', 'use_sim_time:=true', '-p', f't0:={START_AT}',
                         '-p', f'min_periods:={args.min_periods}', '-p', 'show_arms:=false')
             recording = start_recording(group, bag, [topics.topic(key) for key in RECORDED])
             recording.wait_subscribed(timeout=30.0)
-            bridge = group.start('sim_bridge', '--ros-args', '-p', f'robots:={args.robots}',
-                                 '-p', f'scene:={args.scene}', '-p', f'seed:={args.seed}',
+            bridge = group.start('sim_bridge', '--ros-args', *scene_args,
                                  '-p', f'duration:={duration}', '-p', f'start_at:={START_AT}',
                                  '-p', 'wait_for_subscribers:=3', *common)
             print(f'[demo] sim bridge + {args.robots} gait nodes + glider monitor + recorder started (domain '

@@ -179,10 +179,11 @@ SCENE_KINDS: tuple[str, ...] = ('dense', 'pair', 'random')
 
 def build_scene(kind: str, spec: RobotSpec, gait: GaitConfig, robots: int = 7, seed: int = 0,
                 r: float = 1.3, theta: float = math.pi / 2.0, phi: float = math.pi,
-                phases: tuple[float, float] = (0.0, 0.0), random_phases: bool = False) -> Scene:
+                phases: tuple[float, float] = (0.0, 0.0), random_phases: bool = False,
+                phase_jitter: float = 0.0) -> Scene:
     """Build a scene by kind name (``dense``, ``pair`` or ``random``); r in BL, angles in rad."""
     if kind == 'dense':
-        return dense_scene(spec, gait, robots, seed=seed)
+        return dense_scene(spec, gait, robots, seed=seed, phase_jitter=phase_jitter)
     if kind == 'random':
         return random_scene(spec, gait, robots, seed=seed, random_phases=random_phases)
     if kind == 'pair':
