@@ -68,6 +68,7 @@ class World:
         self._gaits: list[SquareGait | None] = [
             SquareGait(r.gait) if r.gait is not None else None for r in scene.robots]
         self._next_gait_update = np.full(n, math.inf)
+        self._next_due = math.inf   # min of _next_gait_update (or earlier): most ticks need no gait work
         self._commands: list[list[tuple[float, float] | None]] = [[None, None] for _ in range(n)]
         self._build()
 
@@ -182,6 +183,7 @@ class World:
             if gait is not None:
                 gait.start(start)
                 self._next_gait_update[k] = start
+                self._next_due = min(self._next_due, start)
 
     def halt(self, robot: int) -> bool:
         """Halt ``robot``'s gait now (arms hold; resume at its next period); False if not running."""
@@ -191,6 +193,7 @@ class World:
             return False
         self._hold_arms(k)
         self._next_gait_update[k] = self.time
+        self._next_due = min(self._next_due, self.time)
         return True
 
     def set_joint_command(self, robot: int, targets: tuple[float, float], speed: float | None = None) -> None:
@@ -228,6 +231,8 @@ class World:
     def _update_gaits(self) -> None:
         """Ask the gait cores whose quarter has ended (or that were started or halted) for new targets."""
         now = self.time
+        if now + _TIME_EPS < self._next_due:
+            return
         due = np.flatnonzero(self._next_gait_update <= now + _TIME_EPS)
         for k in due:
             gait = self._gaits[k]
@@ -242,6 +247,7 @@ class World:
             next_tau = (math.floor(4.0 * tau) + 1) / 4.0
             cfg = gait.config
             self._next_gait_update[k] = gait.start_time + (next_tau - cfg.phase) * cfg.period  # type: ignore[operator]
+        self._next_due = float(self._next_gait_update.min())
 
     # ----------------------------------------------------------------- stepping
     def step(self, n: int = 1) -> None:
