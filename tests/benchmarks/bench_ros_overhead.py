@@ -78,7 +78,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--robots', type=int, default=7)
     parser.add_argument('--periods', type=float, default=20.0)
-    parser.add_argument('--publish-periods', type=float, nargs='+', default=[0.05, 0.025, 0.1])
+    parser.add_argument('--publish-periods', type=float, nargs='+', default=[0.05, 0.1, 1.0 / 60.0])
     parser.add_argument('--quick', action='store_true', help='5 periods, publish period 0.05 s only')
     parser.add_argument('--out', type=Path, default=Path('out/benchmarks'))
     args = parser.parse_args()
