@@ -9,15 +9,13 @@ from __future__ import annotations
 
 from typing import Any
 
-import rclpy
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.time import Time
 
 from smarticle_driver import topics
 from smarticle_driver.gait import (DEFAULT_PERIOD, DEFAULT_SERVO_SPEED, GaitCommand, GaitConfig, GaitError,
                                    SquareGait)
-from smarticle_driver.params import ParameterError, ParamSpec, declare_and_read
+from smarticle_driver.params import ParamSpec, ParameterError, declare_and_read, spin_node
 
 NODE_NAME = 'gait'
 
@@ -139,23 +137,7 @@ class GaitNode(Node):
 
 def main(args: list[str] | None = None) -> None:
     """Entry point of `ros2 run smarticle_driver gait`."""
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = GaitNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except ParameterError as err:
-        if node is None:
-            rclpy.logging.get_logger(NODE_NAME).fatal(str(err))
-            raise SystemExit(2) from err
-        raise
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-
+    spin_node(GaitNode, NODE_NAME, args, startup_errors=(ParameterError,))
 
 if __name__ == '__main__':
     main()

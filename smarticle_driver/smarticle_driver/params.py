@@ -70,3 +70,31 @@ def read_defaults_yaml(path: str, node_name: str) -> dict[str, Any]:
         if isinstance(data, dict) and key in data:
             return dict(data[key]['ros__parameters'])
     raise ParameterError(f'{path}: no section {node_name!r} with ros__parameters')
+
+
+def spin_node(factory: Any, node_name: str, args: list[str] | None = None,
+              startup_errors: tuple[type[BaseException], ...] = (ParameterError,)) -> None:
+    """Run a node the Jazzy way: init, spin until Ctrl-C or shutdown, destroy, try_shutdown.
+
+    An error of ``startup_errors`` raised while the node is being built (a bad parameter or file) is
+    logged as fatal and ends the process with exit code 2; the same error later propagates.
+    """
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = factory()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except startup_errors as err:
+        if node is not None:
+            raise
+        rclpy.logging.get_logger(node_name).fatal(f'cannot start: {err}')
+        raise SystemExit(2) from err
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()

@@ -12,13 +12,11 @@ import re
 import time
 from typing import Any
 
-import rclpy
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 
 from smarticle_driver import topics
 from smarticle_driver.errors import DriverError
-from smarticle_driver.params import ParameterError, declare_and_read
+from smarticle_driver.params import ParameterError, declare_and_read, spin_node
 from smarticle_driver.servo_bridge_core import NODE_NAME, PARAMS, BridgeConfig, ServoBridgeCore, StepResult
 
 #: Seconds between two log lines of the same kind of warning.
@@ -122,23 +120,7 @@ class ServoBridgeNode(Node):
 
 def main(args: list[str] | None = None) -> None:
     """Entry point of `ros2 run smarticle_driver servo_bridge`."""
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = ServoBridgeNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except (ParameterError, DriverError) as err:
-        if node is None:
-            rclpy.logging.get_logger(NODE_NAME).fatal(f'cannot start: {err}')
-            raise SystemExit(2) from err
-        raise
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-
+    spin_node(ServoBridgeNode, NODE_NAME, args, startup_errors=(ParameterError, DriverError))
 
 if __name__ == '__main__':
     main()

@@ -12,11 +12,10 @@ from typing import Any
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.time import Time
 from smarticle_driver import topics
-from smarticle_driver.params import ParameterError, declare_and_read
+from smarticle_driver.params import ParameterError, declare_and_read, spin_node
 
 from .controller import ImpactController, check_sample
 from .errors import FsrSampleError
@@ -101,23 +100,7 @@ class FeedbackNode(Node):
 
 def main(args: list[str] | None = None) -> None:
     """Entry point of `ros2 run smarticle_feedback feedback`."""
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = FeedbackNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except ParameterError as err:
-        if node is None:
-            rclpy.logging.get_logger(NODE_NAME).fatal(str(err))
-            raise SystemExit(2) from err
-        raise
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-
+    spin_node(FeedbackNode, NODE_NAME, args, startup_errors=(ParameterError,))
 
 if __name__ == '__main__':
     main()

@@ -17,11 +17,10 @@ import numpy as np
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Point
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.time import Time
 from smarticle_driver import topics
-from smarticle_driver.params import ParameterError, declare_and_read
+from smarticle_driver.params import ParameterError, declare_and_read, spin_node
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
@@ -174,24 +173,7 @@ class GliderMonitorNode(Node):
 
 def main(args: list[str] | None = None) -> None:
     """Entry point of `ros2 run smarticle_tracking glider_monitor`."""
-    rclpy.init(args=args)
-    node = None
-    code = 0
-    try:
-        node = GliderMonitorNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except ParameterError as err:
-        rclpy.logging.get_logger(MONITOR_NODE).fatal(str(err))
-        code = 2
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    if code:
-        raise SystemExit(code)
-
+    spin_node(GliderMonitorNode, MONITOR_NODE, args, startup_errors=(ParameterError,))
 
 if __name__ == '__main__':
     main()

@@ -18,10 +18,9 @@ import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Pose, PoseArray, PoseStamped
 from rclpy.event_handler import PublisherEventCallbacks
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from smarticle_driver import topics
-from smarticle_driver.params import ParameterError, declare_and_read
+from smarticle_driver.params import ParameterError, declare_and_read, spin_node
 
 from .errors import CalibrationError, FrameEncodingError, FrameSizeError, TrackerError
 from .settings import TRACKER_NODE, TRACKER_PARAMS, tracker_calibration, tracker_config
@@ -151,24 +150,7 @@ class TrackerNode(Node):
 
 def main(args: list[str] | None = None) -> None:
     """Entry point of `ros2 run smarticle_tracking tracker`."""
-    rclpy.init(args=args)
-    node = None
-    code = 0
-    try:
-        node = TrackerNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except ParameterError as err:
-        rclpy.logging.get_logger(TRACKER_NODE).fatal(str(err))
-        code = 2
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    if code:
-        raise SystemExit(code)
-
+    spin_node(TrackerNode, TRACKER_NODE, args, startup_errors=(ParameterError,))
 
 if __name__ == '__main__':
     main()
