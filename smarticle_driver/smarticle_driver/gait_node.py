@@ -78,7 +78,13 @@ class GaitNode(Node):
             f'period {values["period"]:g} s, phase {values["phase"]:g}; {waiting}')
 
     def now(self) -> Time:
-        """Return the node clock's time, never earlier than a time already handed to the gait."""
+        """Return the node clock's time, never earlier than a time already handed to the gait.
+
+        In lock-step mode the gait's time is exactly that of the last /clock message (so a halt takes
+        effect at the tick it belongs to, and the node needs no use_sim_time).
+        """
+        if self.lockstep:
+            return Time(nanoseconds=self._latest_ns)
         now = self.get_clock().now()
         if now.nanoseconds < self._latest_ns:
             return Time(nanoseconds=self._latest_ns, clock_type=now.clock_type)
