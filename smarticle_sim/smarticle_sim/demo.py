@@ -163,7 +163,9 @@ def main(argv: list[str] | None = None) -> int:
     rows = glider_table(analysis.gliders, config)
     print(f'\n[demo] {args.robots} robots, {args.scene} start, alpha_max {args.alpha_max:g} deg, '
           f'{times[-1] / 1.6:.0f} periods received over DDS, {rtf:.1f}x real time')
-    print(f'[demo] gliders (pairs bound >= {args.min_periods} periods):')
+    print(f'[demo] gliders (pairs bound >= {args.min_periods} periods; bound = centre distance under '
+          f'{config.r_bind / config.body_length:.1f} BL in every period, judged from poses alone, as a tracker '
+          'would: neighbours that rest close together count too, see dist [W]):')
     print(format_glider_table(rows) if rows else '  none found in this run')
     moved = np.linalg.norm(poses[-1, :, :2] - poses[0, :, :2], axis=1) / config.width
     print('[demo] net displacement of each robot (W): ' + ', '.join(f'{k}: {d:.2f}' for k, d in enumerate(moved)))
