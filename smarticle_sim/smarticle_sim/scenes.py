@@ -57,8 +57,11 @@ class Scene:
                 raise SceneError(f'scene {self.name!r}: robot {k} at ({robot.x:.3f}, {robot.y:.3f}) m '
                                  f'reaches off the {plate_size} m plate')
             footprints.append(rects)
+        centres = np.array([(robot.x, robot.y) for robot in self.robots])
+        apart = 2.0 * spec.reach + gap + 0.01   # centres farther apart than this cannot overlap (1 cm margin)
         for i in range(len(footprints)):
-            for j in range(i + 1, len(footprints)):
+            near = np.flatnonzero(np.hypot(*(centres[i + 1:] - centres[i]).T) <= apart) + i + 1
+            for j in near:
                 if robots_overlap(footprints[i], footprints[j], gap):
                     a, b = self.robots[i], self.robots[j]
                     raise SceneError(f'scene {self.name!r}: robots {i} at ({a.x:.4f}, {a.y:.4f}) and {j} at '
