@@ -36,6 +36,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help='dense scene: seeded gait-phase offsets in +-this many periods, a stand-in for the '
                              "real robots' phase drift (default 0.1; 0 = perfectly in phase, where the sim's "
                              'pairs bind but do not glide: docs/sim_calibration.md)')
+    parser.add_argument('--feedback', action='store_true',
+                        help='also run the tactile feedback node of every robot (impact window from '
+                             'smarticle_feedback/config/feedback.yaml); the sim then publishes FSR forces')
     parser.add_argument('--min-periods', type=int, default=30,
                         help='a pair bound this many periods is a glider (default 30, as in the paper)')
     parser.add_argument('--out', type=Path, default=Path('out/demo'), help='output folder')
@@ -84,6 +87,14 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
     node.create_subscription(PoseArray, topics.topic('poses'), on_poses, deep)
     node.create_subscription(DiagnosticArray, topics.topic('gliders'), on_gliders,
                              topics.qos_profile(topics.spec_of('gliders').qos))
+    halts = [0] * args.robots
+    if args.feedback:
+        from std_msgs.msg import Header
+
+        for k in range(args.robots):
+            node.create_subscription(Header, topics.topic('halt', k),
+                                     lambda _msg, k=k: halts.__setitem__(k, halts[k] + 1),
+                                     topics.qos_profile(topics.spec_of('halt').qos))
     bag = log_dir.parent / 'bag'
     if bag.exists():
         shutil.rmtree(bag)  # the previous demo run's bag
@@ -97,6 +108,9 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
                 phase = robots[k].gait.phase if robots[k].gait is not None else 0.0
                 group.start('gait', '--ros-args', '-p', f'robot_id:={k}', '-p', 'lockstep:=true',
                             '-p', 'use_sim_time:=true', '-p', f'phase:={phase!r}', *common)
+                if args.feedback:
+                    group.start('feedback', '--ros-args', '-p', f'robot_id:={k}', '-p', 'use_sim_time:=true',
+                                '-p', f'period:={period}', '-p', f'phase:={phase!r}')
             group.start('glider_monitor', '--ros-args', '-p', 'use_sim_time:=true', '-p', f't0:={START_AT}',
                         '-p', f'min_periods:={args.min_periods}', '-p', 'show_arms:=false')
             recording = start_recording(group, bag, [topics.topic(key) for key in RECORDED])
@@ -104,7 +118,8 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
             bridge = group.start('sim_bridge', '--ros-args', *scene_args,
                                  '-p', f'duration:={duration}', '-p', f'start_at:={START_AT}',
                                  '-p', 'wait_for_subscribers:=3', *common)
-            print(f'[demo] sim bridge + {args.robots} gait nodes + glider monitor + recorder started (domain '
+            feedback = f'{args.robots} feedback nodes + ' if args.feedback else ''
+            print(f'[demo] sim bridge + {args.robots} gait nodes + {feedback}glider monitor + recorder started (domain '
                   f'{env["ROS_DOMAIN_ID"]}, logs in {log_dir}); simulating {args.periods:g} periods = '
                   f'{duration:.1f} s', flush=True)
             wall0 = time.monotonic()
@@ -125,6 +140,8 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
             info = recording.stop()
             print(f'[demo] recorded {info.message_count} messages of {len(info.topics)} topics to {bag} '
                   f'(smarticle-bag info {bag})')
+            if args.feedback:
+                print('[demo] feedback halts per robot: ' + ', '.join(f'{k}: {n}' for k, n in enumerate(halts)))
             report = live.get('gliders')
             pairs = [status.name for status in report.status] if report is not None else []
             print(f'[demo] live glider monitor, last report: {len(pairs)} bound pair(s) '

@@ -30,3 +30,15 @@ def test_demo_runs_the_stack_and_writes_its_outputs(tmp_path: Path) -> None:
 
     recorded = read_poses(BagReader(out / 'bag'))   # the bag holds the same poses the demo analysed
     assert recorded.xyh.shape[1] == 3 and len(recorded.stamp) >= 0.9 * len(data['time'])
+
+
+@pytest.mark.integration
+@pytest.mark.slow
+def test_demo_with_feedback_runs_a_feedback_node_per_robot(tmp_path: Path) -> None:
+    out = tmp_path / 'demo'
+    proc = subprocess.run([sys.executable, '-m', 'smarticle_sim.demo', '--robots', '3', '--periods', '3',
+                           '--feedback', '--out', str(out)], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    assert '3 feedback nodes' in proc.stdout and 'feedback halts per robot: 0:' in proc.stdout
+    logs = sorted((out / 'logs').glob('feedback-*.log'))
+    assert len(logs) == 3 and all('windows' in log.read_text() for log in logs)  # each node started
