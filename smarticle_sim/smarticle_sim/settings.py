@@ -112,7 +112,11 @@ class PhysicsConfig:
     contact_breaking_threshold: float = 0.002   # m; Bullet's default 0.02 is far larger than the robots' gaps
     gravity: float = 9.81
     friction_body_plate: float = 0.35           # body on aluminium
-    friction_robot_robot: float = 0.30          # printed plastic on plastic (arm-arm, arm-body, body-body)
+    friction_robot_robot: float = 0.30          # printed plastic on plastic (arm-body; all pairs if the next is None)
+    #: Arm-arm friction. None: every robot-robot pair uses friction_robot_robot. A number: arm-arm uses it,
+    #: arm-body keeps friction_robot_robot, and body-body becomes friction_robot_robot**2 / friction_arm_arm
+    #: (Bullet multiplies the two links' coefficients, so three pairs have only two free values).
+    friction_arm_arm: float | None = None
     restitution: float = 0.0
     position_gain: float = 0.3                  # servo loop: velocity = gain * error / time_step, clamped
     plate_size: float = 0.60                    # square plate side (m), centred on the origin
@@ -131,6 +135,12 @@ class PhysicsConfig:
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ConfigError(f'PhysicsConfig.{name} must be an integer >= 1, got {value!r}')
+        if self.friction_arm_arm is not None:
+            _positive(self, 'friction_arm_arm')
+        if self.link_frictions()[2] > 10.0:
+            raise ConfigError(f'PhysicsConfig.friction_arm_arm: {self.friction_arm_arm} with friction_robot_robot '
+                              f'{self.friction_robot_robot} leaves too little body friction to reach '
+                              f'friction_body_plate {self.friction_body_plate} (plate value above 10)')
         if self.restitution > 1.0:
             raise ConfigError(f'PhysicsConfig.restitution must be in [0, 1], got {self.restitution}')
         if self.position_gain > 1.0:
@@ -141,6 +151,19 @@ class PhysicsConfig:
     def steps_per_tick(self) -> int:
         """Physics steps in one control tick."""
         return steps_per_tick(self.control_tick, self.time_step)
+
+    def link_frictions(self) -> tuple[float, float, float]:
+        """Return the (arm link, body link, plate) lateral friction values given to Bullet.
+
+        Bullet's contact friction is the product of the two colliding links' values, so these give
+        arm-arm = friction_arm_arm (or friction_robot_robot), arm-body = friction_robot_robot and
+        body-plate = friction_body_plate. Arms never touch the plate (arm_plate_collision False).
+        """
+        arm_arm = self.friction_robot_robot if self.friction_arm_arm is None else self.friction_arm_arm
+        arm = math.sqrt(arm_arm)
+        body = self.friction_robot_robot / arm if arm > 0.0 else 0.0
+        plate = self.friction_body_plate / body if body > 0.0 else 0.0
+        return arm, body, plate
 
 
 def steps_per_tick(control_tick: float, time_step: float) -> int:

@@ -80,8 +80,7 @@ class World:
                                     numSubSteps=0, deterministicOverlappingPairs=1,
                                     contactBreakingThreshold=ph.contact_breaking_threshold)
         c.setGravity(0.0, 0.0, -ph.gravity)
-        link_friction = math.sqrt(ph.friction_robot_robot)   # Bullet multiplies the two bodies' values
-        plate_friction = ph.friction_body_plate / link_friction if link_friction > 0 else 0.0
+        arm_friction, body_friction, plate_friction = ph.link_frictions()   # Bullet multiplies the pair's values
         restitution = math.sqrt(ph.restitution)
         half = ph.plate_size / 2.0
         plate_shape = c.createCollisionShape(pybullet.GEOM_BOX,
@@ -122,11 +121,14 @@ class World:
                 linkInertialFramePositions=[[-half_l, 0.0, 0.0], [half_l, 0.0, 0.0]],
                 linkInertialFrameOrientations=[ident, ident], linkParentIndices=[0, 0],
                 linkJointTypes=[pybullet.JOINT_REVOLUTE] * 2, linkJointAxis=[[0, 0, -1], [0, 0, 1]])
-            for link in (-1, *ARM_JOINTS):
-                c.changeDynamics(body, link, lateralFriction=link_friction, restitution=restitution,
-                                 rollingFriction=0.0, spinningFriction=0.0, linearDamping=0.0,
-                                 angularDamping=0.0, jointDamping=0.0,
-                                 activationState=pybullet.ACTIVATION_STATE_DISABLE_SLEEPING)
+            # Damping and activation state are whole-body properties: passed with a link index, PyBullet
+            # applies the call's friction to the base instead of the link. So they go with the base only.
+            c.changeDynamics(body, -1, lateralFriction=body_friction, restitution=restitution,
+                             rollingFriction=0.0, spinningFriction=0.0, linearDamping=0.0, angularDamping=0.0,
+                             activationState=pybullet.ACTIVATION_STATE_DISABLE_SLEEPING)
+            for link in ARM_JOINTS:
+                c.changeDynamics(body, link, lateralFriction=arm_friction, restitution=restitution,
+                                 rollingFriction=0.0, spinningFriction=0.0, jointDamping=0.0)
             if not ph.arm_plate_collision:
                 for j in ARM_JOINTS:
                     c.setCollisionFilterPair(body, self.plate_id, j, -1, 0)

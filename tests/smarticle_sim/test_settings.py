@@ -47,7 +47,8 @@ def test_arms_heavier_than_robot_refused() -> None:
 
 @pytest.mark.parametrize('field, value', [('time_step', 0.0), ('time_step', -1e-3), ('solver_iterations', 0),
                                           ('friction_body_plate', -0.1), ('restitution', 1.5),
-                                          ('max_speed', math.inf)])
+                                          ('max_speed', math.inf), ('friction_arm_arm', 0.0),
+                                          ('friction_arm_arm', math.nan)])
 def test_bad_physics_values_refused(field: str, value: float) -> None:
     with pytest.raises(ConfigError, match=f'PhysicsConfig.{field}'):
         PhysicsConfig(**{field: value})
@@ -66,3 +67,17 @@ def test_from_preset_rejects_unknown_field() -> None:
     assert SimConfig.from_preset('small', time_step=1 / 120, control_tick=1 / 60).physics.steps_per_tick == 2
     with pytest.raises(ConfigError, match='timestep'):
         SimConfig.from_preset('small', timestep=0.01)
+
+
+@pytest.mark.parametrize('arm_arm', [None, 0.3, 1.5])
+def test_link_frictions_multiply_to_the_pair_values(arm_arm: float | None) -> None:
+    ph = PhysicsConfig(friction_robot_robot=0.3, friction_body_plate=0.35, friction_arm_arm=arm_arm)
+    arm, body, plate = ph.link_frictions()
+    assert arm * arm == pytest.approx(0.3 if arm_arm is None else arm_arm)
+    assert arm * body == pytest.approx(0.3)
+    assert body * plate == pytest.approx(0.35)
+
+
+def test_unreachable_plate_friction_refused() -> None:
+    with pytest.raises(ConfigError, match='friction_arm_arm'):
+        PhysicsConfig(friction_robot_robot=0.01, friction_arm_arm=5.0)

@@ -39,6 +39,20 @@ def test_bodies_have_the_specified_masses_and_sizes(config: SimConfig) -> None:
             assert lo[2] == pytest.approx(SMALL.arm_clearance, abs=1e-3)
 
 
+def test_bullet_gets_the_link_frictions_of_the_config(config: SimConfig) -> None:
+    """Bullet multiplies the two links' values: arm-arm, arm-body and body-plate come out as configured."""
+    config = config.with_physics(friction_arm_arm=1.5)
+    with World(config, lone_robot()) as world:
+        c, body = world.client, world.body_ids[0]
+        friction = {link: c.getDynamicsInfo(body, link)[1] for link in (-1, *ARM_JOINTS)}
+        plate = c.getDynamicsInfo(world.plate_id, -1)[1]
+        arm = friction[ARM_JOINTS[0]]
+        assert friction[ARM_JOINTS[1]] == pytest.approx(arm)
+        assert arm * arm == pytest.approx(1.5, rel=1e-5)
+        assert arm * friction[-1] == pytest.approx(config.physics.friction_robot_robot, rel=1e-5)
+        assert friction[-1] * plate == pytest.approx(config.physics.friction_body_plate, rel=1e-5)
+
+
 def test_joint_angle_is_alpha_and_heading_is_the_normal(config: SimConfig) -> None:
     """alpha_i > 0 turns arm i's tip toward the body normal; the pose heading is that normal."""
     heading = 0.4
