@@ -45,7 +45,11 @@ def check_state(time: float, positions: np.ndarray, tilt: np.ndarray, speed: np.
 
 
 def check_penetration(time: float, robot: int, depth: float, physics: PhysicsConfig) -> None:
-    """Raise SimTrouble if a contact of ``robot`` overlaps by more than the configured bound."""
+    """Raise SimTrouble if a contact of ``robot`` overlaps by more than the configured bound.
+
+    The world calls it once the overlap has lasted ``physics.penetration_checks`` trouble checks.
+    """
     if not math.isfinite(depth) or depth > physics.max_penetration:
+        held = f' for {physics.penetration_checks} checks in a row' if physics.penetration_checks > 1 else ''
         raise SimTrouble(robot, time, 'contact penetration depth (m)', depth,
-                         f'limit {physics.max_penetration:g} m: bodies are tunnelling')
+                         f'limit {physics.max_penetration:g} m{held}: bodies are tunnelling')

@@ -64,6 +64,7 @@ class World:
         self._tick_count = 0
         self._state: WorldState | None = None
         self._last_check: tuple[float, np.ndarray | None] = (0.0, None)
+        self._deep_checks = 0          # trouble checks in a row with a contact deeper than max_penetration
         n = len(scene.robots)
         self._gaits: list[SquareGait | None] = [
             SquareGait(r.gait) if r.gait is not None else None for r in scene.robots]
@@ -78,7 +79,8 @@ class World:
         c, ph, spec = self._client, self._physics, self.config.robot
         c.setPhysicsEngineParameter(fixedTimeStep=ph.time_step, numSolverIterations=ph.solver_iterations,
                                     numSubSteps=0, deterministicOverlappingPairs=1,
-                                    contactBreakingThreshold=ph.contact_breaking_threshold)
+                                    contactBreakingThreshold=ph.contact_breaking_threshold,
+                                    contactERP=ph.contact_erp)
         c.setGravity(0.0, 0.0, -ph.gravity)
         arm_friction, body_friction, plate_friction = ph.link_frictions()   # Bullet multiplies the pair's values
         restitution = math.sqrt(ph.restitution)
@@ -400,7 +402,9 @@ class World:
         self._last_check = (now, positions)
         check_state(now, positions, tilt, speed, arms, self._physics, self.config.robot.body_height)
         robot, depth = self.max_penetration()
-        check_penetration(now, robot, depth, self._physics)
+        self._deep_checks = self._deep_checks + 1 if depth > self._physics.max_penetration else 0
+        if self._deep_checks >= self._physics.penetration_checks or depth != depth:
+            check_penetration(now, robot, depth, self._physics)
 
     # ----------------------------------------------------------------- housekeeping
     def _check_robot(self, robot: int) -> int:

@@ -48,7 +48,8 @@ def test_arms_heavier_than_robot_refused() -> None:
 @pytest.mark.parametrize('field, value', [('time_step', 0.0), ('time_step', -1e-3), ('solver_iterations', 0),
                                           ('friction_body_plate', -0.1), ('restitution', 1.5),
                                           ('max_speed', math.inf), ('friction_arm_arm', 0.0),
-                                          ('friction_arm_arm', math.nan)])
+                                          ('friction_arm_arm', math.nan), ('contact_erp', 0.0),
+                                          ('contact_erp', 1.5), ('penetration_checks', 0)])
 def test_bad_physics_values_refused(field: str, value: float) -> None:
     with pytest.raises(ConfigError, match=f'PhysicsConfig.{field}'):
         PhysicsConfig(**{field: value})

@@ -189,6 +189,20 @@ def test_trouble_on_injected_nan(config: SimConfig) -> None:
         assert 'robot 1 at t =' in str(info.value)
 
 
+def test_trouble_on_lasting_penetration_not_on_a_spike(config: SimConfig, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A contact deeper than the bound at one check is a spike the solver pushes out; at 3 in a row, trouble."""
+    scene = Scene((RobotPlacement(-0.1, 0.0, math.pi / 2), RobotPlacement(0.1, 0.0, math.pi / 2)))
+    every = config.physics.trouble_every
+    deep = config.physics.max_penetration * 1.5
+    with World(config, scene) as world:
+        depths = iter([deep, 0.0, deep, deep, 0.0, deep, deep, deep])
+        monkeypatch.setattr(world, 'max_penetration', lambda: (1, next(depths)))
+        world.run(5 * every)                     # deep at checks 1, 3, 4: never 3 in a row
+        with pytest.raises(SimTrouble, match=r'robot 1 .* penetration depth .* 3 checks in a row: bodies are '
+                                             r'tunnelling'):
+            world.run(3 * every)
+
+
 def test_trouble_check_names_robot_time_quantity(config: SimConfig) -> None:
     positions = np.zeros((3, 3))
     positions[2, 0] = 0.5
