@@ -4,7 +4,7 @@ Starts the sim bridge, one gait node per robot, the live glider monitor and a ba
 processes talking over DDS (lock-step, so the physics is reproducible), listens to
 ``/smarticles/poses`` like any other node would, then finds the gliders with the glider analysis core,
 prints a table and writes figures, the poses and an mcap bag to ``out/demo/``.
-Usage: ``./demo.sh [--robots 7] [--periods 100] [--alpha-max 90] [--seed 1]``.
+Usage: ``./demo.sh [--robots 7] [--periods 100] [--alpha-max 90] [--seed 1] [--no-feedback]``.
 """
 
 from __future__ import annotations
@@ -32,13 +32,14 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--periods', type=float, default=100.0, help='gait periods to run (default 100)')
     parser.add_argument('--alpha-max', type=float, default=90.0, help='gait amplitude in degrees (default 90)')
     parser.add_argument('--seed', type=int, default=1, help='seed of the starting arrangement')
-    parser.add_argument('--phase-jitter', type=float, default=0.1,
+    parser.add_argument('--phase-jitter', type=float, default=0.05,
                         help='dense scene: seeded gait-phase offsets in +-this many periods, a stand-in for the '
-                             "real robots' phase drift (default 0.1; 0 = perfectly in phase, where the sim's "
-                             'pairs bind but do not glide: docs/sim_calibration.md)')
-    parser.add_argument('--feedback', action='store_true',
-                        help='also run the tactile feedback node of every robot (impact window from '
-                             'smarticle_feedback/config/feedback.yaml); the sim then publishes FSR forces')
+                             "real robots' phase drift (default 0.05; 0 = perfectly in phase, where the sim's "
+                             'pairs bind but hardly glide: docs/sim_calibration.md)')
+    parser.add_argument('--feedback', action=argparse.BooleanOptionalAction, default=True,
+                        help='run the tactile feedback node of every robot (impact window from '
+                             'smarticle_feedback/config/feedback.yaml; default on); the sim then publishes FSR '
+                             'forces. --no-feedback runs the open-loop gait only')
     parser.add_argument('--min-periods', type=int, default=30,
                         help='a pair bound this many periods is a glider (default 30, as in the paper)')
     parser.add_argument('--out', type=Path, default=Path('out/demo'), help='output folder')

@@ -25,6 +25,9 @@ def test_demo_runs_the_stack_and_writes_its_outputs(tmp_path: Path) -> None:
     assert (out / 'trajectories.png').stat().st_size > 10_000
     assert list((out / 'logs').glob('sim_bridge-*.log'))
     assert 'live glider monitor, last report' in proc.stdout
+    assert '3 feedback nodes' in proc.stdout and 'feedback halts per robot: 0:' in proc.stdout   # on by default
+    logs = sorted((out / 'logs').glob('feedback-*.log'))
+    assert len(logs) == 3 and all('windows' in log.read_text() for log in logs)  # each node started
     from smarticle_bags.arrays import read_poses
     from smarticle_bags.reader import BagReader
 
@@ -34,11 +37,11 @@ def test_demo_runs_the_stack_and_writes_its_outputs(tmp_path: Path) -> None:
 
 @pytest.mark.integration
 @pytest.mark.slow
-def test_demo_with_feedback_runs_a_feedback_node_per_robot(tmp_path: Path) -> None:
+def test_demo_without_feedback_runs_the_open_loop_gait_only(tmp_path: Path) -> None:
     out = tmp_path / 'demo'
-    proc = subprocess.run([sys.executable, '-m', 'smarticle_sim.demo', '--robots', '3', '--periods', '3',
-                           '--feedback', '--out', str(out)], capture_output=True, text=True, timeout=300)
+    proc = subprocess.run([sys.executable, '-m', 'smarticle_sim.demo', '--robots', '2', '--periods', '3',
+                           '--no-feedback', '--out', str(out)], capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
-    assert '3 feedback nodes' in proc.stdout and 'feedback halts per robot: 0:' in proc.stdout
-    logs = sorted((out / 'logs').glob('feedback-*.log'))
-    assert len(logs) == 3 and all('windows' in log.read_text() for log in logs)  # each node started
+    assert 'feedback' not in proc.stdout.split('started')[0] and 'feedback halts' not in proc.stdout
+    assert not list((out / 'logs').glob('feedback-*.log'))
+    assert np.load(out / 'poses.npz')['poses'].shape[1:] == (2, 3)
