@@ -28,12 +28,16 @@ from smarticle_driver.gait import GaitConfig
 
 from .controller import FeedbackConfig, ImpactController
 
-#: The C2 start found with pair_scene for the feedback robot (r in BL, theta, phi in deg, phases); docs/feedback.md.
-C2_START = (1.0, 240.0, 0.0, (0.0, 0.75))
+#: The C2 start of the feedback robot (r in BL, theta, phi in deg, phases): with robot 2 a quarter period
+#: ahead (the paper's basin-scan phase p = 0.25) it binds as an aligned pair that travels (docs/feedback.md).
+C2_START = (1.3, 0.0, 350.0, (0.0, 0.25))
 #: Seeded jitter of the start (r in BL, theta and phi in deg).
 C2_JITTER = (0.04, 4.0, 4.0)
-#: A pair counts as bound in a period in which r drops below this many body lengths.
-R_BIND_BL = 1.45
+#: A pair counts as bound in a period in which r drops below this many body lengths (as in the sim's
+#: calibration; the C2 glider of the feedback robot sits at r ~ 1.5 BL).
+R_BIND_BL = 1.6
+#: Draws of the jittered start before giving up when they overlap (robots' arms at the start phases).
+START_ATTEMPTS = 20
 
 
 @dataclass(frozen=True)
@@ -67,12 +71,15 @@ class PairTrial:
 
 
 def c2_start(seed: int, base: tuple[float, float, float, tuple[float, float]] = C2_START,
-             jitter: tuple[float, float, float] = C2_JITTER) -> tuple[float, float, float]:
-    """The seed's start (r BL, theta deg, phi deg): ``base`` plus uniform jitter (seed 0 = ``base``)."""
+             jitter: tuple[float, float, float] = C2_JITTER, attempt: int = 0) -> tuple[float, float, float]:
+    """The seed's start (r BL, theta deg, phi deg): ``base`` plus uniform jitter (seed 0 = ``base``).
+
+    ``attempt`` > 0 draws again (for a draw whose robots overlap); the draw depends only on (seed, attempt).
+    """
     r, theta, phi, _ = base
-    if seed == 0:
+    if seed == 0 and attempt == 0:
         return (r, theta, phi)
-    u = np.random.default_rng(seed).uniform(-1.0, 1.0, size=3)
+    u = np.random.default_rng([seed, attempt] if attempt else seed).uniform(-1.0, 1.0, size=3)
     return (r + jitter[0] * u[0], theta + jitter[1] * u[1], phi + jitter[2] * u[2])
 
 
@@ -95,7 +102,7 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
                    base: tuple[float, float, float, tuple[float, float]] = C2_START,
                    r_bind_bl: float = R_BIND_BL, sample_every: int = 3) -> PairTrial:
     """Run one C2 pair for ``periods`` gait periods, with the impact controller when ``condition.feedback``."""
-    from smarticle_sim.errors import SimTrouble
+    from smarticle_sim.errors import SceneError, SimTrouble
     from smarticle_sim.scenes import pair_scene
     from smarticle_sim.settings import SimConfig
     from smarticle_sim.world import World
@@ -104,8 +111,16 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
     wall0 = time.perf_counter()
     config = SimConfig.from_preset(preset)
     gait = GaitConfig.from_degrees(condition.alpha_max_deg, servo_speed=config.robot.servo_speed)
-    r, theta, phi = c2_start(seed, base)
-    scene = pair_scene(config.robot, gait, r, math.radians(theta), math.radians(phi), phases=base[3])
+    for attempt in range(START_ATTEMPTS):
+        r, theta, phi = c2_start(seed, base, attempt=attempt)
+        try:
+            scene = pair_scene(config.robot, gait, r, math.radians(theta), math.radians(phi), phases=base[3])
+            break
+        except SceneError:
+            continue
+    else:
+        raise SceneError(f'seed {seed}: no admissible C2 start near {base[:3]} at {condition.alpha_max_deg:g} deg '
+                         f'in {START_ATTEMPTS} draws')
     controllers: list[ImpactController] = []
     if condition.feedback:
         fb = feedback or default_feedback_config()

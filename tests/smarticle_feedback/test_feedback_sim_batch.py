@@ -12,7 +12,7 @@ from smarticle_driver.topics import FSR_FACES
 from smarticle_sim.batch import Recording, save_npz
 
 from smarticle_feedback import calibration
-from smarticle_feedback.experiments import Condition, c2_start, run_pair_trial, summarize
+from smarticle_feedback.experiments import C2_START, Condition, c2_start, run_pair_trial, summarize
 
 
 @pytest.fixture(scope='module')
@@ -33,7 +33,7 @@ def test_c2_collisions_halt_each_robot_at_most_once_per_period(feedback_trials: 
     assert fb.halts, 'the compressed C2 start must produce impacts inside the default window'
     assert not open_loop.halts
     periods = [(robot, math.floor(t / 1.6 + phase)) for t, robot, _ in fb.halts
-               for phase in [(0.0, 0.75)[robot]]]
+               for phase in [C2_START[3][robot]]]
     assert len(periods) == len(set(periods)), periods
     assert all(face in FSR_FACES for _, _, face in fb.halts)
     assert not np.array_equal(fb.r, open_loop.r), 'halting changes the pair dynamics'
@@ -47,6 +47,7 @@ def test_seeds_jitter_the_start_slightly() -> None:
         r, theta, phi = c2_start(seed)
         assert abs(r - base[0]) <= 0.04 and abs(theta - base[1]) <= 4.0 and abs(phi - base[2]) <= 4.0
     assert c2_start(3) == c2_start(3) != c2_start(4)
+    assert c2_start(0, attempt=1) != c2_start(0) and c2_start(3, attempt=2) == c2_start(3, attempt=2)
 
 
 def make_recording(forces: np.ndarray, contacts: np.ndarray, fsr_recorded: bool = True) -> Recording:
