@@ -4,7 +4,7 @@ Starts the sim bridge, one gait node per robot, the live glider monitor and a ba
 processes talking over DDS (lock-step, so the physics is reproducible), listens to
 ``/smarticles/poses`` like any other node would, then finds the gliders with the glider analysis core,
 prints a table and writes figures, the poses and an mcap bag to ``out/demo/``.
-Usage: ``./demo.sh [--robots 7] [--periods 100] [--alpha-max 90] [--seed 1] [--no-feedback]``.
+Usage: ``./demo.sh [--robots 7] [--periods 60] [--alpha-max 90] [--seed 1] [--no-feedback]``.
 """
 
 from __future__ import annotations
@@ -29,7 +29,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--robots', type=int, default=7, help='number of robots (default 7, as in the paper)')
     parser.add_argument('--scene', choices=('dense', 'random', 'pair'), default='dense',
                         help="starting arrangement (default: densely packed, the paper's Fig. 1(c))")
-    parser.add_argument('--periods', type=float, default=100.0, help='gait periods to run (default 100)')
+    parser.add_argument('--periods', type=float, default=60.0,
+                        help='gait periods to run (default 60: under two minutes with 17 processes on two cores)')
     parser.add_argument('--alpha-max', type=float, default=90.0, help='gait amplitude in degrees (default 90)')
     parser.add_argument('--seed', type=int, default=1, help='seed of the starting arrangement')
     parser.add_argument('--phase-jitter', type=float, default=0.05,
