@@ -77,7 +77,9 @@ def spin_node(factory: Any, node_name: str, args: list[str] | None = None,
     """Run a node the Jazzy way: init, spin until Ctrl-C or shutdown, destroy, try_shutdown.
 
     An error of ``startup_errors`` raised while the node is being built (a bad parameter or file) is
-    logged as fatal and ends the process with exit code 2; the same error later propagates.
+    logged as fatal and ends the process with exit code 2; the same error later propagates. An rclpy
+    error raised by ``spin`` because a signal shut the context down under it (Jazzy's executor races,
+    e.g. "failed to initialize wait set") is a clean exit, like KeyboardInterrupt.
     """
     import rclpy
     from rclpy.executors import ExternalShutdownException
@@ -94,6 +96,9 @@ def spin_node(factory: Any, node_name: str, args: list[str] | None = None,
             raise
         rclpy.logging.get_logger(node_name).fatal(f'cannot start: {err}')
         raise SystemExit(2) from err
+    except RuntimeError:    # rclpy's RCLError and pybind11 errors of a context that a signal just ended
+        if node is None or rclpy.ok():
+            raise
     finally:
         if node is not None:
             node.destroy_node()

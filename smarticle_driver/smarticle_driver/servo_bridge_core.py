@@ -4,11 +4,19 @@
 joint command and ``step`` at the FSR rate. It talks to the board only through ``boards.ServoBoard``
 over a ``serial_link.SerialLink`` and returns plain values and messages: it never raises on bad
 input or a failing port. Times are seconds of one monotonic clock.
+
+Thread safety: ``handle_command``, ``step``, ``poll_board_errors``, ``status`` and ``close`` may be
+called from different threads. One lock serialises the board (the serial link) and the core's state
+(targets, slew models, watchdog, counters), and ``step`` holds it only for one board transaction at a
+time (reconnect and target sync, then the single FSR request/reply, then the joint-state readout), never
+across the whole step, so a command arriving during a step waits for at most one short request/reply.
 """
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Sequence
+from contextlib import AbstractContextManager
 from dataclasses import asdict, dataclass, field
 from enum import IntEnum
 from pathlib import Path
@@ -208,6 +216,9 @@ class ServoBridgeCore:
         self.last_board_errors: list[str] = []
         self.last_reply_error = ''
         self._reported_reply_errors = 0
+        #: Serialises the board and all the state above; held for one board transaction at a time.
+        self.lock: AbstractContextManager[Any] = threading.Lock()
+        self._closed = False
 
     @classmethod
     def from_config(cls, config: BridgeConfig) -> ServoBridgeCore:
@@ -220,68 +231,100 @@ class ServoBridgeCore:
 
     def handle_command(self, names: Sequence[str], positions: Sequence[float], velocities: Sequence[float],
                        now: float) -> list[str]:
-        """Take one joint command; send what changed at once; return warnings about the message."""
+        """Take one joint command; send what changed at once; return warnings about the message.
+
+        Waits for at most the one board transaction that may be in progress in another thread.
+        """
         checked = check_command(names, positions, velocities, self.limits, self.config.default_speed)
-        self.counters.add('commands')
-        for counter, count in checked.counts.items():
-            self.counters.add(counter, count)
-        if checked.targets:
-            for joint in self.joints:
-                if joint.name in checked.targets:
-                    joint.target = checked.targets[joint.name]
-                    joint.speed = checked.speeds[joint.name]
-            self.last_command_time = now
-            self.holding = False
-            port_error = self._sync(now)
-            if port_error:
-                checked.warnings.append(port_error)
+        with self.lock:
+            self.counters.add('commands')
+            for counter, count in checked.counts.items():
+                self.counters.add(counter, count)
+            if checked.targets:
+                for joint in self.joints:
+                    if joint.name in checked.targets:
+                        joint.target = checked.targets[joint.name]
+                        joint.speed = checked.speeds[joint.name]
+                self.last_command_time = now
+                self.holding = False
+                port_error = self._sync(now)
+                if port_error:
+                    checked.warnings.append(port_error)
         return checked.warnings
 
     def step(self, now: float) -> StepResult:
-        """Reconnect if due, run the watchdog, send pending targets, sample the FSRs, model the joints."""
+        """Reconnect if due, run the watchdog, send pending targets, sample the FSRs, model the joints.
+
+        Takes the lock three times (reconnect + watchdog + sync, the FSR transaction, the readout), so
+        commands from another thread get to the board between them.
+        """
         result = StepResult()
-        was_open = self.link.is_open
-        if self.link.poll():
-            result.events.append(f'port {self.link.port} opened')
-            result.warnings.extend(self._on_open(now))
-        self._watchdog(now, result)
-        self._sync(now)    # a port lost here is reported as an event below
-        if self.link.is_open:
-            try:
-                counts = self.board.read_analog(self.config.fsr_channels)
-                result.fsr_counts = tuple(counts)
-                result.fsr_newtons = tuple(m.newtons(c) for m, c in zip(self.fsrs, counts, strict=True))
-                self.counters.add('fsr_samples')
-            except ReplyError as err:
-                result.warnings.append(self._count_reply_error(err))
-            except PortUnavailable:
-                pass       # reported as an event below
-        if was_open and not self.link.is_open:
-            result.events.append(f'port {self.link.port} lost ({self.link.last_error}); '
-                                 'reopening with back-off')
-        if self.link.is_open and all(j.model.known for j in self.joints):
-            result.joint_positions = tuple(j.cal.pulse_to_angle(j.model.position(now)) for j in self.joints)
-            result.joint_velocities = tuple(j.model.velocity(now) / j.cal.us_per_rad for j in self.joints)
+        with self.lock:
+            if self._closed:
+                return result
+            was_open = self.link.is_open
+            if self.link.poll():
+                result.events.append(f'port {self.link.port} opened')
+                result.warnings.extend(self._on_open(now))
+            self._watchdog(now, result)
+            self._sync(now)    # a port lost here is reported as an event below
+        counts = self._read_fsrs(result)
+        if counts is not None:
+            result.fsr_counts = tuple(counts)
+            result.fsr_newtons = tuple(m.newtons(c) for m, c in zip(self.fsrs, counts, strict=True))
+        with self.lock:
+            if was_open and not self.link.is_open:
+                result.events.append(f'port {self.link.port} lost ({self.link.last_error}); '
+                                     'reopening with back-off')
+            if self.link.is_open and all(j.model.known for j in self.joints):
+                result.joint_positions = tuple(j.cal.pulse_to_angle(j.model.position(now)) for j in self.joints)
+                result.joint_velocities = tuple(j.model.velocity(now) / j.cal.us_per_rad for j in self.joints)
         return result
 
     def poll_board_errors(self) -> list[str]:
         """Read and clear the board's error flags; return warnings (empty when all is well)."""
-        if not self.link.is_open:
+        with self.lock:
+            if self._closed or not self.link.is_open:
+                return []
+            try:
+                errors = self.board.get_errors()
+            except ReplyError as err:
+                return [self._count_reply_error(err)]
+            except PortUnavailable as err:
+                return [str(err)]
+            if errors:
+                self.counters.add('board_errors')
+                self.last_board_errors = errors
+                return [f'board reports errors: {", ".join(errors)}']
             return []
-        try:
-            errors = self.board.get_errors()
-        except ReplyError as err:
-            return [self._count_reply_error(err)]
-        except PortUnavailable as err:
-            return [str(err)]
-        if errors:
-            self.counters.add('board_errors')
-            self.last_board_errors = errors
-            return [f'board reports errors: {", ".join(errors)}']
-        return []
 
     def status(self, now: float) -> BridgeStatus:
         """Summarise port, watchdog and counters for /diagnostics."""
+        with self.lock:
+            return self._status(now)
+
+    def close(self) -> None:
+        """Close the serial port for good: later steps do nothing (waits for a transaction in progress)."""
+        with self.lock:
+            self._closed = True
+            self.link.close()
+
+    def _read_fsrs(self, result: StepResult) -> list[int] | None:
+        """Sample the four FSR inputs in one board transaction, under the lock; None if it failed."""
+        with self.lock:
+            if self._closed or not self.link.is_open:
+                return None
+            try:
+                counts = self.board.read_analog(self.config.fsr_channels)
+            except ReplyError as err:
+                result.warnings.append(self._count_reply_error(err))
+                return None
+            except PortUnavailable:
+                return None    # reported as an event by step
+            self.counters.add('fsr_samples')
+            return counts
+
+    def _status(self, now: float) -> BridgeStatus:
         link = self.link
         counts = self.counters.as_dict()
         reply_errors = sum(counts[k] for k in ('short_reply', 'garbage', 'malformed', 'bad_reply'))
@@ -320,10 +363,6 @@ class ServoBridgeCore:
         }
         values.update({k: str(v) for k, v in self.counters.as_dict().items()})
         return BridgeStatus(level, message, values)
-
-    def close(self) -> None:
-        """Close the serial port."""
-        self.link.close()
 
     def _watchdog(self, now: float, result: StepResult) -> None:
         """Hold the arms where the model says they are when commands have stopped."""

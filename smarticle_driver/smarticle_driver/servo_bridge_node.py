@@ -4,11 +4,18 @@ Subscribes ``/smarticle_<k>/joint_commands``; publishes ``/smarticle_<k>/joint_s
 model: the Maestro reports commanded, not measured, pulses), ``/smarticle_<k>/fsr`` (newtons) at
 ``fsr_rate_hz`` and ``/diagnostics``. All the work is in ``servo_bridge_core.ServoBridgeCore``; see
 docs/servo_bridge.md.
+
+Threads: the FSR step runs in its own thread (``fsr-step``) on a fixed 1/fsr_rate_hz grid; joint commands
+and diagnostics run in the executor's thread. A command therefore goes to the board while a step is in
+progress, waiting (on the core's lock) for at most the one board transaction under way. An exception in
+the step thread is re-raised in the executor's thread, so it ends ``rclpy.spin`` as a timer's would.
 """
 
 from __future__ import annotations
 
+import math
 import re
+import threading
 import time
 from typing import Any
 
@@ -33,6 +40,7 @@ class ServoBridgeNode(Node):
         self.config = BridgeConfig.from_values(values)
         self.core = ServoBridgeCore.from_config(self.config)
         self._warned: dict[str, tuple[float, int]] = {}
+        self._warned_lock = threading.Lock()
         k = self.config.robot_id
         self._joint_state = topics.message_class('sensor_msgs/msg/JointState')
         diag = topics.spec_of('diagnostics')
@@ -46,19 +54,43 @@ class ServoBridgeNode(Node):
         self.diag_pub = self.create_publisher(self._diag_array, diag.resolve(), topics.qos_profile(diag.qos))
         self.create_subscription(self._joint_state, commands.resolve(k), self.on_command,
                                  topics.qos_profile(commands.qos))
-        self.step_timer = self.create_timer(1.0 / self.config.fsr_rate_hz, self.on_step)
         self.diag_timer = self.create_timer(self.config.diagnostics_period, self.on_diagnostics)
+        self._step_error: BaseException | None = None
+        self._step_failed = self.create_guard_condition(self._raise_step_error)
+        self._stop = threading.Event()
+        self._stepper = threading.Thread(target=self._step_loop, name='fsr-step', daemon=True)
         self.get_logger().info(
             f'robot {k}: {self.config.board} board on {self.config.port}, servos on channels '
             f'{self.config.servo_channels}, FSRs on {self.config.fsr_channels} at '
             f'{self.config.fsr_rate_hz:g} Hz; '
             f'calibration {self.config.servo_calibration_path()} and {self.config.fsr_calibration_path()}')
+        self._stepper.start()
 
     def on_command(self, msg: Any) -> None:
         """Pass a joint command to the core and log what was wrong with it."""
         warnings = self.core.handle_command(list(msg.name), list(msg.position), list(msg.velocity),
                                             time.monotonic())
         self._warn(warnings)
+
+    def _step_loop(self) -> None:
+        """Body of the step thread: ``on_step`` every 1/fsr_rate_hz s on a fixed grid (late ticks skipped)."""
+        period = 1.0 / self.config.fsr_rate_hz
+        due = time.monotonic()
+        try:
+            while not self._stop.is_set():
+                self.on_step()
+                due += period
+                late = time.monotonic() - due
+                if late > 0.0:
+                    due += math.ceil(late / period) * period
+                self._stop.wait(due - time.monotonic())
+        except BaseException as err:     # a bug: end the node from the executor's thread, as a timer would
+            self._step_error = err
+            self._step_failed.trigger()
+
+    def _raise_step_error(self) -> None:
+        if self._step_error is not None:
+            raise self._step_error
 
     def on_step(self) -> None:
         """Run one bridge step and publish joint states and FSR forces."""
@@ -81,10 +113,13 @@ class ServoBridgeNode(Node):
         array = self._diag_array()
         array.header.stamp = self.get_clock().now().to_msg()
         array.status = [item]
-        self.diag_pub.publish(array)
+        self._send(self.diag_pub, array)
 
     def destroy_node(self) -> None:
-        """Close the serial port, then destroy the node."""
+        """Stop the step thread, close the serial port, then destroy the node."""
+        self._stop.set()
+        if self._stepper.is_alive() and self._stepper is not threading.current_thread():
+            self._stepper.join()
         self.core.close()
         super().destroy_node()
 
@@ -96,26 +131,35 @@ class ServoBridgeNode(Node):
             msg.name = list(topics.JOINT_NAMES)
             msg.position = list(result.joint_positions)
             msg.velocity = list(result.joint_velocities)
-            self.joint_pub.publish(msg)
+            self._send(self.joint_pub, msg)
         if result.fsr_newtons is not None:
             msg = self._joint_state()
             msg.header.stamp = stamp
             msg.name = list(topics.FSR_FACES)
             msg.effort = list(result.fsr_newtons)
-            self.fsr_pub.publish(msg)
+            self._send(self.fsr_pub, msg)
+
+    def _send(self, publisher: Any, msg: Any) -> None:
+        """Publish, except while shutting down (Ctrl-C or SIGTERM can end the context during a step)."""
+        try:
+            publisher.publish(msg)
+        except RuntimeError:        # rclpy's RCLError: "publisher's context is invalid"
+            if self.context.ok():
+                raise
 
     def _warn(self, warnings: list[str]) -> None:
         """Log warnings, each kind (the text without its numbers) at most once per WARN_THROTTLE."""
         now = time.monotonic()
         for text in warnings:
             kind = _NUMBERS.sub('#', text)
-            last, skipped = self._warned.get(kind, (-WARN_THROTTLE, 0))
-            if now - last < WARN_THROTTLE:
-                self._warned[kind] = (last, skipped + 1)
-                continue
+            with self._warned_lock:      # the step thread and the executor's thread both warn
+                last, skipped = self._warned.get(kind, (-WARN_THROTTLE, 0))
+                if now - last < WARN_THROTTLE:
+                    self._warned[kind] = (last, skipped + 1)
+                    continue
+                self._warned[kind] = (now, 0)
             more = f' ({skipped} similar warnings not shown)' if skipped else ''
             self.get_logger().warning(text + more)
-            self._warned[kind] = (now, 0)
 
 
 def main(args: list[str] | None = None) -> None:

@@ -3,20 +3,22 @@
 from __future__ import annotations
 
 import math
+import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 import pytest
 
 from smarticle_driver import topics
-from smarticle_driver.calibration import load_fsr_calibration
+from smarticle_driver.calibration import FsrModel, load_fsr_calibration, load_servo_calibration
 from smarticle_driver.emulator import MaestroEmulator
 from smarticle_driver.errors import BridgeConfigError
+from smarticle_driver.maestro import MaestroBoard
 from smarticle_driver.params import read_defaults_yaml
 from smarticle_driver.servo_bridge_core import (NODE_NAME, PARAMS, BridgeConfig, Level, ServoBridgeCore,
                                                 StepResult, check_command)
-from tests.smarticle_driver.fake_board_helpers import running_emulator, wait_until
+from tests.smarticle_driver.fake_board_helpers import open_board, running_emulator, wait_until
 
 ROOT = Path(__file__).resolve().parents[2]
 Command = tuple[list[str], list[float], list[float]]
@@ -215,3 +217,161 @@ def test_a_vanished_port_is_reopened_and_the_targets_are_sent_again(core: ServoB
     assert up[-1].joint_positions == pytest.approx((0.4, -0.3), abs=1e-3)
     assert up[-1].fsr_newtons is not None
     assert core.status(time.monotonic()).values['port_disconnects'] == '1' and core.link.opens == 2
+
+
+# -- threads: the node runs commands and steps in different threads -----------------------------------
+
+#: Seconds a test thread waits for another before the test gives up (a hang guard, not a timing limit).
+LIVENESS = 10.0
+
+
+class OrderedBoard:
+    """A Maestro that logs its calls in order; the next FSR read can be held open until released."""
+
+    def __init__(self, board: MaestroBoard, log: list[str]) -> None:
+        self.board, self.log = board, log
+        self.analog_full_scale, self.analog_volts = board.analog_full_scale, board.analog_volts
+        self.hold_read = False
+        self.reading, self.release_read, self.target_sent = threading.Event(), threading.Event(), threading.Event()
+
+    def set_target(self, channel: int, pulse_us: float) -> float:
+        sent = self.board.set_target(channel, pulse_us)
+        self.log.append(f'set_target {channel}')
+        self.target_sent.set()
+        return sent
+
+    def set_speed(self, channel: int, us_per_s: float) -> float:
+        return self.board.set_speed(channel, us_per_s)
+
+    def read_analog(self, channels: Sequence[int]) -> list[int]:
+        if self.hold_read:
+            self.hold_read = False
+            self.log.append('fsr read begins')
+            self.reading.set()
+            assert self.release_read.wait(LIVENESS)
+        counts = self.board.read_analog(channels)
+        self.log.append('fsr read ends')
+        return counts
+
+    def read_pulse(self, channel: int) -> float:
+        return self.board.read_pulse(channel)
+
+    def get_errors(self) -> list[str]:
+        return self.board.get_errors()
+
+
+class ObservedLock:
+    """The core's lock, telling when a thread has to wait for it."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self.waited = threading.Event()
+
+    def __enter__(self) -> ObservedLock:
+        if not self._lock.acquire(blocking=False):
+            self.waited.set()
+            self._lock.acquire()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._lock.release()
+
+
+class SlowFsr:
+    """An FSR model whose conversion, while ``wait_for`` is set, lasts until that event is set."""
+
+    def __init__(self, model: FsrModel) -> None:
+        self.model = model
+        self.wait_for: threading.Event | None = None
+
+    def newtons(self, counts: float) -> float:
+        if self.wait_for is not None:
+            self.wait_for.wait(LIVENESS)
+        return self.model.newtons(counts)
+
+
+def ordered_core(emulator: MaestroEmulator, log: list[str]) -> tuple[ServoBridgeCore, OrderedBoard, SlowFsr]:
+    """A core on the emulator whose board logs its calls and whose first FSR face converts slowly."""
+    config = BridgeConfig(port=str(emulator.link_path), watchdog_timeout=30.0, reply_timeout=0.05)
+    servos = load_servo_calibration(config.servo_calibration_path())
+    fsrs: dict[str, FsrModel] = dict(load_fsr_calibration(config.fsr_calibration_path()))
+    slow = SlowFsr(fsrs[topics.FSR_FACES[0]])
+    fsrs[topics.FSR_FACES[0]] = slow
+    link, maestro = open_board(emulator.link_path, reply_timeout=0.05)
+    board = OrderedBoard(maestro, log)
+    return ServoBridgeCore(config, servos, fsrs, link, board), board, slow
+
+
+def test_a_command_during_a_slow_fsr_step_is_written_before_the_step_ends(emulator: MaestroEmulator) -> None:
+    """Order of events, not timing: the command waits for the FSR transaction only, not for the step."""
+    log: list[str] = []
+    core, board, slow = ordered_core(emulator, log)
+    core.handle_command(['arm1', 'arm2'], [0.0, 0.0], [2.0, 2.0], time.monotonic())
+    core.step(time.monotonic())
+    core.lock = lock = ObservedLock()
+    log.clear()
+    board.target_sent.clear()
+    board.hold_read = True                 # the step's FSR transaction stays open until released ...
+    slow.wait_for = board.target_sent      # ... and the rest of the step lasts until a target is written
+
+    def step() -> None:
+        core.step(time.monotonic())
+        log.append('step ends')
+
+    stepping = threading.Thread(target=step)
+    stepping.start()
+    assert board.reading.wait(LIVENESS)
+    commanding = threading.Thread(target=core.handle_command,
+                                  args=(['arm1', 'arm2'], [0.5, 0.0], [2.0, 2.0], time.monotonic()))
+    commanding.start()
+    assert lock.waited.wait(LIVENESS), 'the command must wait while the FSR transaction is in progress'
+    board.release_read.set()
+    stepping.join(LIVENESS)
+    commanding.join(LIVENESS)
+    assert not stepping.is_alive() and not commanding.is_alive()
+    assert log == ['fsr read begins', 'fsr read ends', 'set_target 0', 'step ends'], (
+        'the command must wait for the FSR transaction but not for the end of the step')
+    assert wait_until(lambda: [(r.channel, r.pulse_us) for r in emulator.targets()[-1:]] == [(0, 1800.0)],
+                      LIVENESS)
+    assert core.counters.commands == 2 and core.counters.fsr_samples == 2
+    core.close()
+
+
+def test_commands_and_steps_from_two_threads_keep_the_byte_stream_and_counters_intact(
+        core: ServoBridgeCore, emulator: MaestroEmulator) -> None:
+    core.step(time.monotonic())
+    emulator.set_voltage(3, 1.0)
+    commands = 300
+    angles = [0.4 * math.sin(i / 7.0) for i in range(commands)]
+
+    def command() -> None:
+        for a in angles:
+            core.handle_command(['arm1', 'arm2'], [a, -a], [50.0, 50.0], time.monotonic())
+
+    commanding = threading.Thread(target=command)
+    commanding.start()
+    steps = 0
+    while commanding.is_alive() or steps < 20:
+        result = core.step(time.monotonic())
+        assert result.fsr_counts == (0, 205, 0, 0) and not result.warnings, result
+        steps += 1
+    commanding.join()
+    final = round((1500 + 600 * angles[-1]) * 4) / 4     # both arms (arm2 is mirrored, its target is -a)
+
+    def arrived() -> bool:
+        last = {r.channel: r.pulse_us for r in emulator.targets()}
+        return last.get(0) == last.get(1) == final
+
+    assert wait_until(arrived, LIVENESS), emulator.targets()[-2:]
+    assert emulator.protocol_errors == 0, 'interleaved bytes from two threads would break the protocol'
+    assert core.counters.commands == commands and core.counters.fsr_samples == steps + 1
+    assert core.link.discarded_bytes == 0
+    assert core.status(time.monotonic()).values['commands'] == str(commands)
+
+
+def test_a_closed_core_stays_closed(core: ServoBridgeCore) -> None:
+    core.step(time.monotonic())
+    core.close()
+    result = core.step(time.monotonic())
+    assert not core.link.is_open and result.fsr_newtons is None and not result.events
+    assert core.poll_board_errors() == []
