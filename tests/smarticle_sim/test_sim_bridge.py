@@ -118,7 +118,7 @@ def test_gait_nodes_drive_the_sim_in_lockstep_deterministically(nodes, ros_node)
                         '-p', 'use_sim_time:=true')
         bridge = nodes.start('sim_bridge', '--ros-args', '-p', 'scene:=pair', '-p', 'pair_r:=2.5',
                              '-p', f'duration:={duration}', '-p', 'start_at:=0.5',
-                             '-p', 'wait_for_subscribers:=1')
+                             '-p', f'wait_for_subscribers:={run + 1}')   # earlier probes still listen
         spin_until(node, lambda bridge=bridge: bridge.poll() is not None, 90.0)
         spin_until(node, lambda: False, 0.3)
         assert bridge.returncode == 0, nodes.output(bridge)
