@@ -44,12 +44,17 @@ def check_state(time: float, positions: np.ndarray, tilt: np.ndarray, speed: np.
         raise SimTrouble(k, time, 'body speed (m/s)', float(speed[k]), f'limit {physics.max_speed:g} m/s')
 
 
-def check_penetration(time: float, robot: int, depth: float, physics: PhysicsConfig) -> None:
-    """Raise SimTrouble if a contact of ``robot`` overlaps by more than the configured bound.
+def check_penetration(time: float, robot: int, depth: float, physics: PhysicsConfig, deep_checks: int = 0) -> int:
+    """Count a trouble check's deepest contact overlap; raise SimTrouble when it is tunnelling.
 
-    The world calls it once the overlap has lasted ``physics.penetration_checks`` trouble checks.
+    ``deep_checks`` is the number of checks in a row so far with an overlap beyond
+    ``physics.max_penetration``; the updated count is returned for the next call. A non-finite depth, or
+    an overlap that has lasted ``physics.penetration_checks`` checks (a one-check spike that the solver
+    pushes out is not a tunnel), raises SimTrouble naming ``robot``.
     """
-    if not math.isfinite(depth) or depth > physics.max_penetration:
+    deep_checks = deep_checks + 1 if depth > physics.max_penetration else 0
+    if not math.isfinite(depth) or deep_checks >= physics.penetration_checks:
         held = f' for {physics.penetration_checks} checks in a row' if physics.penetration_checks > 1 else ''
         raise SimTrouble(robot, time, 'contact penetration depth (m)', depth,
                          f'limit {physics.max_penetration:g} m{held}: bodies are tunnelling')
+    return deep_checks

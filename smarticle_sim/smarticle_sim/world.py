@@ -92,7 +92,7 @@ class World:
                                            rgbaColor=[0.75, 0.75, 0.78, 1.0])
         self.plate_id = c.createMultiBody(0.0, plate_shape, plate_visual,
                                           basePosition=[0.0, 0.0, -ph.plate_thickness / 2.0])
-        c.changeDynamics(self.plate_id, -1, lateralFriction=min(plate_friction, 10.0),
+        c.changeDynamics(self.plate_id, -1, lateralFriction=plate_friction,
                          restitution=restitution, rollingFriction=0.0, spinningFriction=0.0)
 
         w, d, h = spec.body_width, spec.body_depth, spec.body_height
@@ -402,9 +402,7 @@ class World:
         self._last_check = (now, positions)
         check_state(now, positions, tilt, speed, arms, self._physics, self.config.robot.body_height)
         robot, depth = self.max_penetration()
-        self._deep_checks = self._deep_checks + 1 if depth > self._physics.max_penetration else 0
-        if self._deep_checks >= self._physics.penetration_checks or depth != depth:
-            check_penetration(now, robot, depth, self._physics)
+        self._deep_checks = check_penetration(now, robot, depth, self._physics, self._deep_checks)
 
     # ----------------------------------------------------------------- housekeeping
     def _check_robot(self, robot: int) -> int:
