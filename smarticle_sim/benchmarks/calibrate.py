@@ -266,6 +266,13 @@ def figure(name: str) -> tuple[Any, Any]:
     return fig, fig.add_subplot(1, 1, 1)
 
 
+def scatter_by_class(ax: Any, rows: list[dict[str, Any]], x: str, y: str) -> None:
+    """Scatter ``rows[x]`` against ``rows[y]``, one colour per glider class (black: no glider)."""
+    for cls, colour in (('C1', 'tab:red'), ('C2', 'tab:blue'), ('unclassified', 'tab:gray'), ('', 'k')):
+        sel = [r for r in rows if r['class'] == cls]
+        ax.scatter([r[x] for r in sel], [r[y] for r in sel], c=colour, label=cls or 'none')
+
+
 def save(fig: Any, name: str) -> Path:
     """Write a figure to out/calibration/<name>.png."""
     OUT.mkdir(parents=True, exist_ok=True)
@@ -311,9 +318,7 @@ def exp_pairs(args: argparse.Namespace) -> None:
     print_table(rows, cols)
     print('csv:', write_csv('pairs', rows, {'settings': args.label, 'periods': args.periods}))
     fig, ax = figure('pairs')
-    for cls, colour in (('C1', 'tab:red'), ('C2', 'tab:blue'), ('unclassified', 'tab:gray'), ('', 'k')):
-        sel = [r for r in rows if r['class'] == cls]
-        ax.scatter([r['life'] for r in sel], [r['dist_W'] for r in sel], c=colour, label=cls or 'none')
+    scatter_by_class(ax, rows, 'life', 'dist_W')
     ax.set_xlabel('longest bound run (periods)')
     ax.set_ylabel('distance travelled while bound (W)')
     ax.set_title(f'pairs, {args.periods} periods, {args.label}', fontsize=9)
@@ -460,9 +465,7 @@ def exp_phase(args: argparse.Namespace) -> None:
     print_table(rows, cols)
     print('csv:', write_csv('phase', rows, {'settings': args.label, 'periods': args.periods}))
     fig, ax = figure('phase')
-    for cls, colour in (('C1', 'tab:red'), ('C2', 'tab:blue'), ('unclassified', 'tab:gray'), ('', 'k')):
-        sel = [r for r in rows if r['class'] == cls]
-        ax.scatter([r['phase2'] for r in sel], [r['dist_W'] for r in sel], c=colour, label=cls or 'none')
+    scatter_by_class(ax, rows, 'phase2', 'dist_W')
     ax.set_xlabel('phase of robot 2 (periods)')
     ax.set_ylabel('distance travelled while bound (W)')
     ax.set_title(f'phase-offset pairs, {args.periods} periods, {args.label}', fontsize=9)
