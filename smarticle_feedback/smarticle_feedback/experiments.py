@@ -1,9 +1,9 @@
 """Paper P6 in simulation: C2 pairs of the `feedback` robot, open loop against impact-halt feedback.
 
-The batch core runs directly (no ROS): a ``World`` with its gait cores, FSR forces read every control
-tick for both robots and fed to one ``ImpactController`` per robot; when a controller says halt, the
-loop calls ``World.halt(k)`` before the next tick, so the in-process halt latency is at most one
-control tick. ``smarticle-feedback-p6 --quick`` runs a small version.
+The batch core runs directly (no ROS): a batch trial (``run_trial``) whose runner has, before the gait
+controller, a ``FeedbackController`` that feeds every control tick's FSR forces of both robots to one
+``ImpactController`` per robot; a halt decided in a tick is part of that tick, so the in-process halt
+latency is at most one control tick. ``smarticle-feedback-p6 --quick`` runs a small version.
 
 Lifetime of a pair: the glider analysis of ``smarticle_tracking.gliders`` (``analyse_gliders`` with
 ``min_periods = 1`` and ``r_bind`` in feedback-robot body lengths); the lifetime is the length of the
@@ -102,10 +102,12 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
                    base: tuple[float, float, float, tuple[float, float]] = C2_START,
                    r_bind_bl: float = R_BIND_BL, sample_every: int = 3) -> PairTrial:
     """Run one C2 pair for ``periods`` gait periods, with the impact controller when ``condition.feedback``."""
-    from smarticle_sim.errors import SceneError, SimTrouble
+    from smarticle_sim.batch import run_trial
+    from smarticle_sim.errors import SceneError
+    from smarticle_sim.physics import Physics
+    from smarticle_sim.runner import Controller, FeedbackController, GaitController
     from smarticle_sim.scenes import pair_scene
     from smarticle_sim.settings import SimConfig
-    from smarticle_sim.world import World
     from smarticle_tracking.pairs import pair_coordinates
 
     wall0 = time.perf_counter()
@@ -121,42 +123,29 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
     else:
         raise SceneError(f'seed {seed}: no admissible C2 start near {base[:3]} at {condition.alpha_max_deg:g} deg '
                          f'in {START_ATTEMPTS} draws')
-    controllers: list[ImpactController] = []
-    if condition.feedback:
+    feedback_controllers: list[FeedbackController] = []
+
+    def add_feedback(_: Physics, gaits: GaitController) -> list[Controller]:
+        if not condition.feedback:
+            return []
         fb = feedback or default_feedback_config()
-        controllers = [ImpactController(replace(fb, period=gait.period, phase=p)) for p in base[3]]
-        for c in controllers:
-            c.start(start_time)
-    trial = PairTrial(condition, seed, np.empty(0), np.empty(0), np.empty(0), start=(r, theta, phi))
-    with World(config, scene) as world:
-        ticks = world.ticks_for(start_time + periods * gait.period)
-        capacity = ticks // sample_every + 1
-        times = np.empty(capacity)
-        poses = np.empty((capacity, 2, 3))
-        taken = 0
-        world.start_gaits(start_time)
-        try:
-            for i in range(ticks + 1):
-                if i % sample_every == 0:
-                    times[taken], poses[taken] = world.time, world.poses()
-                    taken += 1
-                if controllers:
-                    forces = world.fsr([0, 1])
-                    for k, controller in enumerate(controllers):
-                        decision = controller.update(world.time, forces[k])
-                        if decision.halt and world.halt(k):
-                            trial.halts.append((world.time, k, decision.face or ''))
-                if i < ticks:
-                    world.tick()
-        except SimTrouble as trouble:
-            trial.trouble = str(trouble)
-    times, poses = times[:taken], poses[:taken]
-    coords = pair_coordinates(poses)
-    trial.times = times
+        policies = {k: ImpactController(replace(fb, period=gait.period, phase=p)) for k, p in enumerate(base[3])}
+        for policy in policies.values():
+            policy.start(start_time)
+        feedback_controllers.append(FeedbackController(gaits, policies))
+        return feedback_controllers
+
+    recording = run_trial(config, scene, periods, sample_every=sample_every, controllers=add_feedback,
+                          start_time=start_time)
+    trial = PairTrial(condition, seed, recording.time, np.empty(0), np.empty(0), start=(r, theta, phi),
+                      trouble=recording.trouble)
+    if feedback_controllers:
+        trial.halts = list(feedback_controllers[0].halts)
+    coords = pair_coordinates(recording.poses)
     trial.r = coords.r[:, 0] / config.robot.body_length
     trial.phi = coords.phi[:, 0]
-    trial.lifetime_periods, trial.censored = pair_lifetime(times, poses, gait.period, config.robot.body_length,
-                                                          r_bind_bl, t0=start_time)
+    trial.lifetime_periods, trial.censored = pair_lifetime(recording.time, recording.poses, gait.period,
+                                                          config.robot.body_length, r_bind_bl, t0=start_time)
     trial.wall = time.perf_counter() - wall0
     return trial
 

@@ -1,4 +1,4 @@
-"""The stepping loop of batch experiments: run a world for N gait periods and record its ground truth.
+"""A batch trial: run a scene for N gait periods through the one ``Runner`` loop and record its ground truth.
 
 The npz format (``docs/sim_core.md``): S samples, N robots, arrays
 
@@ -9,7 +9,7 @@ The npz format (``docs/sim_core.md``): S samples, N robots, arrays
 Samples are taken at ``DEFAULT_SAMPLE_RATE`` (20 Hz) unless asked otherwise; FSR and contacts are
 recorded only when asked (``record_fsr``, ``record_contacts``), so a default run costs little more than
 stepping (poses: two PyBullet calls per robot per sample, written into preallocated arrays).
-The heading follows ``World.poses`` (body normal, [-pi, pi)).
+The heading follows ``Physics.poses`` (body normal, [-pi, pi)).
 * ``body_length`` () m; ``meta`` () JSON string of the settings, scene and outcome.
 """
 
@@ -19,15 +19,20 @@ import json
 import math
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable, Sequence
 
 import numpy as np
 from smarticle_driver.topics import FSR_FACES
 
 from .errors import SimError, SimTrouble
 from .scenes import Scene
+from .physics import ARM_JOINTS, Physics
+from .runner import Controller, GaitController, Hook, Runner
 from .settings import SimConfig
-from .world import ARM_JOINTS, World
+
+#: Builds the extra controllers of a trial (e.g. feedback) from its physics and gait controller; they run
+#: before the gait controller in every tick.
+ControllerFactory = Callable[[Physics, GaitController], Sequence[Controller]]
 
 
 @dataclass
@@ -74,10 +79,10 @@ class _PoseReader:
     into the preallocated recording arrays with one bulk assignment per array.
     """
 
-    def __init__(self, world: World) -> None:
-        self._pose = world.client.getBasePositionAndOrientation
-        self._joints = world.client.getJointStates
-        self._bodies = world.body_ids
+    def __init__(self, physics: Physics) -> None:
+        self._pose = physics.client.getBasePositionAndOrientation
+        self._joints = physics.client.getJointStates
+        self._bodies = physics.body_ids
 
     def read(self, poses: np.ndarray, arms: np.ndarray) -> None:
         """Write (N, 3) x, y, heading of the body normal into ``poses`` and (N, 2) alphas into ``arms``."""
@@ -99,14 +104,16 @@ _TWO_PI = 2.0 * math.pi
 
 def run_trial(config: SimConfig, scene: Scene, periods: float, sample_every: int | None = None,
               record_fsr: bool = False, record_contacts: bool = False,
-              progress: bool = False) -> Recording:
-    """Run ``scene`` for ``periods`` gait periods from a synchronised start at t = 0 and record it.
+              progress: bool = False, controllers: ControllerFactory | None = None,
+              start_time: float = 0.0) -> Recording:
+    """Run ``scene`` for ``periods`` gait periods from a synchronised start at ``start_time`` and record it.
 
     Samples are taken every ``sample_every`` control ticks (the first at t = 0); the default is about
     ``DEFAULT_SAMPLE_RATE`` (20 Hz: every 3 ticks at the default 60 Hz control tick). Poses and arm
     angles are always recorded; FSR forces and robot-robot contacts only when asked (otherwise their
     arrays are zeros / False). A SimTrouble ends the trial early: the recording keeps every sample
-    taken so far and ``meta['trouble']`` says why.
+    taken so far and ``meta['trouble']`` says why. ``controllers`` adds controllers (e.g. feedback)
+    that act before the gait cores in every tick; they may record what they did themselves.
     """
     if not (math.isfinite(periods) and periods > 0):
         raise SimError(f'periods must be > 0, got {periods!r}')
@@ -120,7 +127,8 @@ def run_trial(config: SimConfig, scene: Scene, periods: float, sample_every: int
     n_faces = len(FSR_FACES)
     meta: dict[str, Any] = {
         'robot': asdict(config.robot), 'physics': asdict(config.physics), 'scene': scene.name,
-        'seed': scene.seed, 'periods': periods, 'period': period, 'sample_every': sample_every,
+        'seed': scene.seed, 'periods': periods, 'period': period, 'start_time': start_time,
+        'sample_every': sample_every,
         'sample_rate': 1.0 / (sample_every * config.physics.control_tick),
         'fsr_recorded': record_fsr, 'contacts_recorded': record_contacts,
         'fsr_faces': list(FSR_FACES), 'trouble': '',
@@ -128,39 +136,38 @@ def run_trial(config: SimConfig, scene: Scene, periods: float, sample_every: int
                      'phase': r.gait.phase if r.gait else None,
                      'alpha_max': r.gait.alpha_max if r.gait else None} for r in scene.robots],
     }
-    with World(config, scene) as world:
-        ticks = world.ticks_for(periods * period)
-        ticks_per_period = max(1, world.ticks_for(period))
+    with Physics(config, scene) as physics:
+        gaits = GaitController.for_scene(physics)
+        extra = list(controllers(physics, gaits)) if controllers is not None else []
+        runner = Runner(physics, [*extra, gaits])
+        ticks = runner.ticks_for(start_time + periods * period)
+        ticks_per_period = max(1, runner.ticks_for(period))
         capacity = ticks // sample_every + 1
         times = np.empty(capacity)
         poses = np.empty((capacity, n, 3))
         arms = np.empty((capacity, n, 2))
         fsrs = np.zeros((capacity if record_fsr else 0, n, n_faces))
         touching = np.zeros((capacity if record_contacts else 0, n, n), dtype=bool)
-        reader = _PoseReader(world)
+        reader = _PoseReader(physics)
         bar = _progress_bar(ticks, progress)
         taken = 0
 
-        def sample() -> None:
+        def sample(_: Runner) -> None:
             nonlocal taken
-            times[taken] = world.time
+            times[taken] = physics.time
             reader.read(poses[taken], arms[taken])
             if record_fsr:
-                fsrs[taken] = world.fsr()
+                fsrs[taken] = physics.fsr()
             if record_contacts:
-                touching[taken] = world.robot_contacts()
+                touching[taken] = physics.robot_contacts()
             taken += 1
 
-        world.start_gaits(0.0)
-        tick = world.tick
+        hooks = [Hook(sample_every, sample)]
+        if bar is not None:
+            hooks.append(Hook(ticks_per_period, lambda _: bar.update(ticks_per_period), at_start=False))
+        gaits.start(start_time)
         try:
-            sample()
-            for i in range(1, ticks + 1):
-                tick()
-                if i % sample_every == 0:
-                    sample()
-                if bar is not None and i % ticks_per_period == 0:
-                    bar.update(ticks_per_period)
+            runner.run(ticks, hooks)
         except SimTrouble as trouble:
             meta['trouble'] = str(trouble)
         finally:

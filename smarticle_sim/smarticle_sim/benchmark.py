@@ -1,4 +1,7 @@
-"""Speed benchmark: World stepping (gait cores, trouble checks, recording) against a bare PyBullet loop.
+"""Speed benchmark: the Runner loop (gait cores, trouble checks, recording) against a bare PyBullet loop.
+
+The bare loop is the reference of the speed figures, and the one loop over ``stepSimulation`` outside
+``Runner``: it steps the same scene with corner targets at quarter boundaries and nothing else.
 
 Every timing function takes a ``clock`` (default ``time.perf_counter``, wall time); on a machine shared
 with other work, ``time.process_time`` (this process's CPU time; PyBullet DIRECT steps in-process on
@@ -17,7 +20,8 @@ import pybullet
 from .batch import run_trial, scene_period
 from .scenes import Scene
 from .settings import SimConfig
-from .world import ARM_JOINTS, World
+from .physics import ARM_JOINTS, Physics
+from .runner import GaitController, Runner
 
 Clock = Callable[[], float]
 
@@ -45,8 +49,8 @@ class BenchRow:
 def bare_loop(config: SimConfig, scene: Scene, periods: float,
               clock: Clock = time.perf_counter) -> tuple[int, float]:
     """Step the same scene with raw stepSimulation calls and corner targets sent at quarter boundaries."""
-    with World(config, scene) as world:
-        c = world.client
+    with Physics(config, scene) as physics:
+        c = physics.client
         period = scene_period(scene)
         steps = round(periods * period / config.physics.time_step)
         quarter_steps = round(period / 4.0 / config.physics.time_step)
@@ -62,7 +66,7 @@ def bare_loop(config: SimConfig, scene: Scene, periods: float,
         for i in range(steps):
             if i % quarter_steps == 0:
                 q = (i // quarter_steps) % 4
-                for body, corners in zip(world.body_ids, schedule, strict=True):
+                for body, corners in zip(physics.body_ids, schedule, strict=True):
                     for j in ARM_JOINTS:
                         c.setJointMotorControl2(body, j, pybullet.POSITION_CONTROL,
                                                 targetPosition=corners[q][j], force=torque,
@@ -71,15 +75,17 @@ def bare_loop(config: SimConfig, scene: Scene, periods: float,
         return steps, clock() - start
 
 
-def world_loop(config: SimConfig, scene: Scene, periods: float,
+def runner_loop(config: SimConfig, scene: Scene, periods: float,
                clock: Clock = time.perf_counter) -> tuple[int, float]:
-    """Run the World's own tick loop (gait cores, command on change, trouble checks), no recording."""
-    with World(config, scene) as world:
-        ticks = world.ticks_for(periods * scene_period(scene))
-        world.start_gaits(0.0)
+    """Run the Runner's tick loop (gait cores, command on change, trouble checks), no recording."""
+    with Physics(config, scene) as physics:
+        gaits = GaitController.for_scene(physics)
+        runner = Runner(physics, [gaits])
+        ticks = runner.ticks_for(periods * scene_period(scene))
+        gaits.start(0.0)
         start = clock()
-        world.run(ticks)
-        return world.step_count, clock() - start
+        runner.run(ticks)
+        return physics.step_count, clock() - start
 
 
 def batch_loop(config: SimConfig, scene: Scene, periods: float, sample_every: int | None = None,
@@ -100,7 +106,7 @@ def benchmark(config: SimConfig, scene: Scene, periods: float = 10.0, repeats: i
     """Time every mode ``repeats`` times, interleaved, and keep each mode's best run."""
     modes = {
         'bare pybullet loop': lambda: bare_loop(config, scene, periods, clock),
-        'World.run (gaits, trouble checks)': lambda: world_loop(config, scene, periods, clock),
+        'Runner.run (gaits, trouble checks)': lambda: runner_loop(config, scene, periods, clock),
         'batch default (poses at 20 Hz, no FSR)': lambda: batch_loop(config, scene, periods, clock=clock),
         'batch, poses every tick, no FSR': lambda: batch_loop(config, scene, periods, 1, False, clock),
         'batch, poses+FSR+contacts at 20 Hz': lambda: batch_loop(config, scene, periods, None, True, clock),

@@ -1,4 +1,4 @@
-"""The simulation bridge without ROS: a World driven by external joint commands, with lock-step bookkeeping.
+"""The simulation bridge without ROS: physics driven by external joint commands, with lock-step bookkeeping.
 
 The sim bridge node (``sim_bridge_node.py``) turns messages into calls on ``SimBridgeCore`` and its
 outputs back into messages; everything here is plain Python and NumPy, so tests and benchmarks can
@@ -27,7 +27,8 @@ from .camera import BACKENDS, CameraConfig, OverheadCamera
 from .errors import ConfigError
 from .scenes import SCENE_KINDS, Scene, build_scene
 from .settings import PRESETS, PhysicsConfig, SimConfig
-from .world import World
+from .physics import Physics
+from .runner import Runner
 
 NODE_NAME = 'sim_bridge'
 _PHYSICS = PhysicsConfig()
@@ -177,18 +178,17 @@ class BridgeSettings:
 
 
 class SimBridgeCore:
-    """A World whose robots follow external joint commands, advanced one publish period at a time."""
+    """Physics whose robots follow external joint commands, advanced one publish period at a time."""
 
     def __init__(self, settings: BridgeSettings) -> None:
         self.settings = settings
         scene = settings.scene()
-        self.world = World(settings.sim, scene)
-        self.n_robots = self.world.n_robots
-        for k in range(self.n_robots):
-            self.world.set_gait(k, None)
+        self.physics = Physics(settings.sim, scene)
+        self.runner = Runner(self.physics)   # no controllers: the commands come from outside
+        self.n_robots = self.physics.n_robots
         self.limits = {name: (-settings.joint_limit, settings.joint_limit) for name in topics.JOINT_NAMES}
         self.command_stamp_ns = np.full(self.n_robots, -1, dtype=np.int64)
-        self._targets = self.world.arm_angles().copy()
+        self._targets = self.physics.arm_angles().copy()
         self._noise = np.random.default_rng(settings.noise_seed)
         self.ticks_per_publish = settings.ticks_per_publish
         self._camera: OverheadCamera | None = None
@@ -197,12 +197,12 @@ class SimBridgeCore:
     @property
     def time(self) -> float:
         """Sim time (s)."""
-        return self.world.time
+        return self.physics.time
 
     @property
     def time_ns(self) -> int:
         """Sim time in integer nanoseconds (the stamp of what is published now)."""
-        return round(self.world.time * 1e9)
+        return round(self.physics.time * 1e9)
 
     def apply_command(self, robot: int, names: list[str], positions: list[float],
                       velocities: list[float], stamp_ns: int) -> CheckedCommand:
@@ -213,7 +213,7 @@ class SimBridgeCore:
                 if name in checked.targets:
                     self._targets[robot, j] = checked.targets[name]
             speed = min(checked.speeds.values())
-            self.world.set_joint_command(robot, (float(self._targets[robot, 0]), float(self._targets[robot, 1])),
+            self.physics.command(robot, (float(self._targets[robot, 0]), float(self._targets[robot, 1])),
                                          speed)
         self.command_stamp_ns[robot] = max(self.command_stamp_ns[robot], stamp_ns)
         return checked
@@ -224,12 +224,11 @@ class SimBridgeCore:
 
     def advance(self) -> None:
         """Run one publish period of control ticks (SimTrouble propagates)."""
-        for _ in range(self.ticks_per_publish):
-            self.world.tick()
+        self.runner.run(self.ticks_per_publish)
 
     def poses(self) -> np.ndarray:
         """(N, 3) published poses: ground truth plus the configured Gaussian noise."""
-        poses = self.world.poses()
+        poses = self.physics.poses()
         sigma_xy, sigma_heading = self.settings.pose_noise
         if sigma_xy == 0.0 and sigma_heading == 0.0:
             return poses
@@ -254,12 +253,12 @@ class SimBridgeCore:
 
     def render_frame(self) -> np.ndarray:
         """A mono8 overhead frame of the ground truth now (robots, arms, tags); schedules the next one."""
-        state = self.world.state()
-        frame = self.camera.render(state.poses, state.arm_angles, world=self.world)
+        state = self.physics.state()
+        frame = self.camera.render(state.poses, state.arm_angles, physics=self.physics)
         if self.settings.camera_rate > 0.0:
             self.skip_frame()
         return frame
 
     def close(self) -> None:
         """Release the physics client."""
-        self.world.close()
+        self.physics.close()

@@ -11,7 +11,7 @@ Two rendering paths give the same picture of the same geometry:
 * ``opencv`` (default, the faster one, see docs/tracking.md): the known geometry is drawn directly:
   anti-aliased ``fillPoly`` of the arms and the white body top, then each tag's bitmap warped onto its
   body top inside a small region of interest.
-* ``pybullet``: ``getCameraImage`` (TINY renderer) of ``World.client`` with the same intrinsics and pose,
+* ``pybullet``: ``getCameraImage`` (TINY renderer) of ``Physics.client`` with the same intrinsics and pose,
   then the same tag warp (PyBullet's boxes carry no tag texture).
 
 Noise, blur and uneven lighting are optional and seeded. No rclpy here; the sim bridge node publishes
@@ -277,19 +277,19 @@ class OverheadCamera:
             image = cv2.add(image, noise, dtype=cv2.CV_8U)
         return image
 
-    def render(self, poses: np.ndarray, arm_angles: np.ndarray | None = None, world: Any = None) -> np.ndarray:
+    def render(self, poses: np.ndarray, arm_angles: np.ndarray | None = None, physics: Any = None) -> np.ndarray:
         """A mono8 frame (height, width) of robots at ``poses`` (N, 3) with ``arm_angles`` (N, 2) or no arms.
 
-        The ``pybullet`` backend renders ``world`` (a World whose robots are at these poses) instead of
+        The ``pybullet`` backend renders ``physics`` (a Physics whose robots are at these poses) instead of
         drawing the bodies and arms; the tags are warped on in both paths. Robots with a non-finite pose
         are not drawn.
         """
         poses = np.asarray(poses, dtype=float).reshape(-1, 3)
         drawn = np.all(np.isfinite(poses), axis=1)
         if self.config.backend == 'pybullet':
-            if world is None:
-                raise ConfigError('the pybullet camera backend renders a World: pass world=')
-            image = self._render_pybullet(world)
+            if physics is None:
+                raise ConfigError('the pybullet camera backend renders a Physics: pass physics=')
+            image = self._render_pybullet(physics)
         else:
             image = self._background.copy()
             arms = None if arm_angles is None else np.asarray(arm_angles, dtype=float)[drawn]
@@ -298,15 +298,15 @@ class OverheadCamera:
         self._warp_tags(image, poses[drawn], np.flatnonzero(drawn))
         return self._finish(image)
 
-    def _render_pybullet(self, world: Any) -> np.ndarray:
-        """getCameraImage of the world's client with this camera's intrinsics and pose (TINY renderer)."""
+    def _render_pybullet(self, physics: Any) -> np.ndarray:
+        """getCameraImage of the physics' client with this camera's intrinsics and pose (TINY renderer)."""
         import pybullet
 
         c = self.config
         near, far = 0.1, c.elevation + 1.0
         target = self.centre + self.rotation[:, 2]
         up = -self.rotation[:, 1]
-        view = world.client.computeViewMatrix(self.centre.tolist(), target.tolist(), up.tolist())
+        view = physics.client.computeViewMatrix(self.centre.tolist(), target.tolist(), up.tolist())
         fx, fy = self.camera_matrix[0, 0], self.camera_matrix[1, 1]
         cx, cy = self.camera_matrix[0, 2], self.camera_matrix[1, 2]
         w, h = c.width, c.height
@@ -315,7 +315,7 @@ class OverheadCamera:
                 0.0, 2 * fy / h, 0.0, 0.0,
                 1.0 - 2 * (cx + 0.5) / w, 2 * (cy + 0.5) / h - 1.0, -(far + near) / (far - near), -1.0,
                 0.0, 0.0, -2.0 * far * near / (far - near), 0.0]
-        _, _, rgba, _, _ = world.client.getCameraImage(w, h, view, proj, renderer=pybullet.ER_TINY_RENDERER,
+        _, _, rgba, _, _ = physics.client.getCameraImage(w, h, view, proj, renderer=pybullet.ER_TINY_RENDERER,
                                                        flags=pybullet.ER_NO_SEGMENTATION_MASK)
         rgb = np.asarray(rgba, dtype=np.uint8).reshape(h, w, 4)[:, :, :3]
         return self._cv2.cvtColor(rgb, self._cv2.COLOR_RGB2GRAY)

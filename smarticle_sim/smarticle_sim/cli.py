@@ -28,7 +28,7 @@ def build_parser() -> argparse.ArgumentParser:
                                      description=__doc__.split('\n')[0] if __doc__ else None)
     sub = parser.add_subparsers(dest='command', required=True)
     run = sub.add_parser('run', help='simulate a scene and write an npz recording plus a trajectory PNG')
-    bench = sub.add_parser('bench', help='time World stepping against a bare PyBullet loop (prints a table)')
+    bench = sub.add_parser('bench', help='time the Runner loop against a bare PyBullet loop (prints a table)')
     for p in (run, bench):
         p.add_argument('--scene', choices=('dense', 'pair', 'random'), default='dense')
         p.add_argument('--robots', type=int, default=7, help='number of robots (dense, random)')

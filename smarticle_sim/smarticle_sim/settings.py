@@ -187,7 +187,7 @@ def steps_per_tick(control_tick: float, time_step: float) -> int:
 
 @dataclass(frozen=True)
 class SimConfig:
-    """Everything a World needs besides the scene: the robot spec and the physics settings."""
+    """Everything a Physics needs besides the scene: the robot spec and the physics settings."""
 
     robot: RobotSpec = SMALL
     physics: PhysicsConfig = field(default_factory=PhysicsConfig)

@@ -118,8 +118,8 @@ class SimBridgeNode(Node):
         clock = self.Clock()
         clock.clock = now
         self.clock_pub.publish(clock)
-        world = self.core.world
-        state = world.state()
+        physics = self.core.physics
+        state = physics.state()
         poses = self.core.poses()
         for k, pub in enumerate(self.joint_pubs):
             if pub.get_subscription_count() == 0:
@@ -132,7 +132,7 @@ class SimBridgeNode(Node):
             pub.publish(msg)
         listened = [k for k, pub in enumerate(self.fsr_pubs) if pub.get_subscription_count() > 0]
         if listened:
-            forces = world.fsr(listened)
+            forces = physics.fsr(listened)
             for row, k in enumerate(listened):
                 msg = self.JointState()
                 msg.header.stamp = now
@@ -194,7 +194,7 @@ class SimBridgeNode(Node):
 
     # ------------------------------------------------------------------ loop
     def run(self, executor: SingleThreadedExecutor) -> int:
-        """Step the world until the duration is reached or ROS shuts down; return an exit code."""
+        """Step the physics until the duration is reached or ROS shuts down; return an exit code."""
         settings = self.settings
         end_ns = round(settings.duration * 1e9) if settings.duration > 0 else None
         wall0, sim0 = time.monotonic(), self.core.time

@@ -15,7 +15,7 @@ import numpy as np
 from smarticle_driver.gait import GaitConfig
 from smarticle_sim.scenes import dense_scene
 from smarticle_sim.settings import SimConfig
-from smarticle_sim.world import World
+from smarticle_sim.runner import Runner
 from smarticle_tracking.glider_monitor import GliderMonitor
 from smarticle_tracking.gliders import GliderConfig
 from smarticle_tracking.markers import render_png, scene_markers
@@ -27,10 +27,11 @@ def main(path: str) -> None:
     gait = GaitConfig.from_degrees(90.0)
     monitor = GliderMonitor(GliderConfig(min_periods=3))
     bound: tuple = ()  # type: ignore[type-arg]
-    with World(config, dense_scene(config.robot, gait, 7, seed=1)) as world:
-        world.start_gaits(0.0)
+    with Runner.with_gaits(config, dense_scene(config.robot, gait, 7, seed=1)) as run:
+        world = run.physics
+        run.gaits.start(0.0)
         for _ in range(8 * 32):
-            world.run(world.ticks_for(0.05))
+            run.run(world.ticks_for(0.05))
             bound = monitor.update(world.time, world.poses())
         poses, arms = world.poses().copy(), world.arm_angles().copy()
     shapes = scene_markers(poses, bound, arms)

@@ -121,10 +121,10 @@ def clock_of(name: str) -> Callable[[], float]:
 
 
 class PhysicsTimer:
-    """While active, time every ``World.step`` call (the stepSimulation loop) of every World.
+    """While active, time every ``Physics.step`` call (the stepSimulation loop) of every Physics.
 
     ``inside`` accumulates clock seconds spent stepping the physics; total - inside is what the
-    World, the gait cores, the trouble checks and any recording cost on top of the very same
+    Physics, the gait cores, the trouble checks and any recording cost on top of the very same
     trajectory, which is far steadier on a shared machine than comparing two separate runs.
     """
 
@@ -134,20 +134,20 @@ class PhysicsTimer:
         self._saved: Any = None
 
     def __enter__(self) -> PhysicsTimer:
-        from smarticle_sim.world import World
+        from smarticle_sim.physics import Physics
 
-        self._saved = World.step
-        original, clock = World.step, self.clock
+        self._saved = Physics.step
+        original, clock = Physics.step, self.clock
 
         def step(world: Any, n: int = 1) -> None:
             t0 = clock()
             original(world, n)
             self.inside += clock() - t0
 
-        World.step = step  # type: ignore[method-assign]
+        Physics.step = step  # type: ignore[method-assign]
         return self
 
     def __exit__(self, *exc: object) -> None:
-        from smarticle_sim.world import World
+        from smarticle_sim.physics import Physics
 
-        World.step = self._saved  # type: ignore[method-assign]
+        Physics.step = self._saved  # type: ignore[method-assign]

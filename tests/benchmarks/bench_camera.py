@@ -1,7 +1,7 @@
 """Sim camera: rendering cost of the two paths, and what rendering only while subscribed saves.
 
 1. Per resolution, milliseconds per frame of ``OverheadCamera.render`` with the ``opencv`` path (draw
-   the known geometry) and the ``pybullet`` path (``getCameraImage``, TINY renderer, on World.client),
+   the known geometry) and the ``pybullet`` path (``getCameraImage``, TINY renderer, on Physics.client),
    7 robots, one thread; plus the tracker's detection rate and median error on each path's frames.
 2. The sim bridge core over one sim second (20 publish periods, 7 robots, lock-step commands from the gait
    cores): advancing only (nobody subscribes to the camera: nothing is rendered) against advancing plus a
@@ -45,16 +45,16 @@ def render_costs(repeats: int) -> list[dict[str, Any]]:
     rows = []
     try:
         core.advance()
-        state = core.world.state()
+        state = core.physics.state()
         for w, h in RESOLUTIONS:
             tracker = TagTracker(TrackerConfig(), sim_calibration(w, h))
             for backend in ('opencv', 'pybullet'):
                 camera = OverheadCamera(CameraConfig(width=w, height=h, backend=backend))
-                frame = camera.render(state.poses, state.arm_angles, world=core.world)
+                frame = camera.render(state.poses, state.arm_angles, physics=core.physics)
                 times = []
                 for _ in range(repeats):
                     start = time.perf_counter()
-                    camera.render(state.poses, state.arm_angles, world=core.world)
+                    camera.render(state.poses, state.arm_angles, physics=core.physics)
                     times.append(time.perf_counter() - start)
                 result = tracker.track(frame)
                 err = np.hypot(*(result.poses[result.seen, :2] - state.poses[result.seen, :2]).T) * 1000.0

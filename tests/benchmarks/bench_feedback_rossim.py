@@ -2,8 +2,8 @@
 
 ROS path: sim_bridge (lock-step, publish_period = one control tick, so an FSR sample is published every
 tick as the batch loop reads it) + one gait node (lockstep, use_sim_time) and one feedback node
-(use_sim_time) per robot, separate processes over DDS. Batch path: ``run_pair_trial`` (World + gait
-cores + controller calling World.halt, halt applied before the next tick). For each seed it prints halts,
+(use_sim_time) per robot, separate processes over DDS. Batch path: ``run_pair_trial`` (Runner + gait
+cores + controller calling GaitController.halt, halt applied before the next tick). For each seed it prints halts,
 the lifetime and r at the end, and writes CSV under out/benchmarks/.
 The halt is asynchronous to the lock-step barrier (see docs/feedback.md): it lands on the tick of its
 FSR sample if it reaches the gait node before the bridge's barrier closes, else a tick or two later.

@@ -1,7 +1,7 @@
 """ROS overhead: the lock-step sim-in-the-loop (sim bridge + gait nodes over DDS) against the batch core.
 
 Runs the same scene three ways in one go and prints a table (CSV and PNG under out/benchmarks/):
-  batch-world   World with its internal gait cores (what the batch CLI does), no ROS
+  batch-world   Runner with its gait controller (what the batch CLI does), no ROS
   batch-bridge  SimBridgeCore driven in-process exactly like the lock-step ROS path, no ROS
   ros-lockstep  sim_bridge + one gait node per robot, separate processes over DDS, for each publish period
 Usage: python tests/benchmarks/bench_ros_overhead.py [--robots 7] [--periods 20] [--quick]
@@ -19,21 +19,22 @@ from smarticle_driver.gait import SquareGait
 from smarticle_driver.launching import ProcessGroup, isolated_ros_env
 from smarticle_sim.bridge import BridgeSettings, SimBridgeCore
 from smarticle_sim.scenes import build_scene
-from smarticle_sim.world import World
+from smarticle_sim.runner import Runner
 
 START_AT = 0.5
 
 
 def batch_world(settings: BridgeSettings, seconds: float) -> float:
-    """Wall time of a World running its own gait cores for ``seconds``."""
+    """Wall time of a Runner with its gait controller for ``seconds``."""
     r, theta, phi, p0, p1 = settings.pair
     scene = build_scene(settings.scene_kind, settings.sim.robot, settings.gait, settings.robots,
                         seed=settings.seed, r=r, theta=theta, phi=phi, phases=(p0, p1))
-    with World(settings.sim, scene) as world:
-        world.start_gaits(START_AT)
+    with Runner.with_gaits(settings.sim, scene) as run:
+        world = run.physics
+        run.gaits.start(START_AT)
         ticks = world.ticks_for(seconds)
         t0 = time.perf_counter()
-        world.run(ticks)
+        run.run(ticks)
         return time.perf_counter() - t0
 
 
@@ -51,7 +52,7 @@ def batch_bridge(settings: BridgeSettings, seconds: float) -> float:
             cmd = gait.command(now * 1e-9)
             core.apply_command(k, list(topics.JOINT_NAMES), list(cmd.targets), [cmd.speed] * 2, now)
         core.advance()
-        core.world.poses()
+        core.physics.poses()
     wall = time.perf_counter() - t0
     core.close()
     return wall

@@ -7,7 +7,7 @@ For every (rate, solver iterations) setting, from the same seeded starts:
   and |mean r - mean r_ref| of the pair separation r over the whole run (BL);
 * a single robot runs ``--single-periods`` periods; drift per cycle = net displacement / periods (um);
   error = |drift - drift_ref| / drift_ref;
-* wall time per simulated second of the pair run (World ticks, poses read at 20 Hz; best of two runs,
+* wall time per simulated second of the pair run (Runner ticks, poses read at 20 Hz; best of two runs,
   which must give bit-identical trajectories: column ``repeatable``).
 
 Full mode also runs the single robot at ``--drift-rates`` (default 7680 Hz) to show whether its drift
@@ -38,7 +38,7 @@ from smarticle_driver.gait import GaitConfig
 from smarticle_sim.errors import SimTrouble
 from smarticle_sim.scenes import RobotPlacement, Scene, pair_scene
 from smarticle_sim.settings import SimConfig
-from smarticle_sim.world import World
+from smarticle_sim.runner import Runner
 
 #: Tolerances of the knee rule (see ``knee``).
 TOL_POS10_BL = 0.05
@@ -51,17 +51,18 @@ def run_pair(config: SimConfig, scene: Scene, periods: int, sample_every: int,
     """Run the pair; return xy at 1 and 10 periods, r samples, wall seconds per sim second, trouble."""
     bl = config.robot.body_length
     period = scene.robots[0].gait.period  # type: ignore[union-attr]
-    with World(config, scene) as world:
+    with Runner.with_gaits(config, scene) as run:
+        world = run.physics
         ticks = world.ticks_for(periods * period)
         per = world.ticks_for(period)
         marks = {per: 'xy1', min(10, periods) * per: 'xy10'}
         out: dict[str, object] = {'trouble': ''}
         rs = []
-        world.start_gaits(0.0)
+        run.gaits.start(0.0)
         start = clock()
         try:
             for i in range(1, ticks + 1):
-                world.tick()
+                run.tick()
                 if i % sample_every == 0 or i in marks:
                     poses = world.poses()
                     rs.append(math.hypot(*(poses[1, :2] - poses[0, :2])) / bl)
@@ -79,11 +80,12 @@ def run_single(config: SimConfig, gait: GaitConfig, periods: int) -> tuple[float
     """Net drift per gait cycle (m) of one robot alone, and the trouble message ('' if none)."""
     a = gait.alpha_max
     scene = Scene((RobotPlacement(0.0, 0.0, math.pi / 2.0, a, a, gait),), name='single')
-    with World(config, scene) as world:
+    with Runner.with_gaits(config, scene) as run:
+        world = run.physics
         start = world.poses()[0, :2].copy()
-        world.start_gaits(0.0)
+        run.gaits.start(0.0)
         try:
-            world.run(world.ticks_for(periods * gait.period))
+            run.run(world.ticks_for(periods * gait.period))
         except SimTrouble as trouble:
             return math.nan, str(trouble)
         return float(np.linalg.norm(world.poses()[0, :2] - start)) / periods, ''

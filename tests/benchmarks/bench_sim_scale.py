@@ -4,12 +4,12 @@ Part 1, scale: for N robots (dense hexagonal packing like the paper's Fig. 1(c),
 at the same area per robot) the same scene is run four ways, interleaved, best of ``--repeats``:
 
 * ``raw``: a bare PyBullet loop (``stepSimulation`` plus corner targets at gait quarter boundaries);
-* ``world``: ``World.run`` (gait cores, command-on-change, trouble checks), no recording;
+* ``world``: ``Runner.run`` (gait cores, command-on-change, trouble checks), no recording;
 * ``batch``: ``run_trial`` with its defaults (poses and arm angles at 20 Hz, no FSR);
 * ``batch+all``: ``run_trial`` recording poses, FSR and contacts every control tick.
 
-Reports the real-time factor, microseconds per robot-step and, for the World-based modes, the time
-spent outside ``World.step`` within the same run (the steady measure of overhead on a shared
+Reports the real-time factor, microseconds per robot-step and, for the Runner-based modes, the time
+spent outside ``Physics.step`` within the same run (the steady measure of overhead on a shared
 machine), and fits cost ~ N^b (least squares on log time-per-step against log N).
 
 Part 2, P1: 7 robots dense (seed 1), 300 periods (``--quick``: 30), batch core with the CLI defaults
@@ -35,7 +35,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import (PhysicsTimer, Progress, add_clock_argument, clock_of, figure, machine_line, markdown_table,
                      out_path, write_csv)
 from smarticle_driver.gait import GaitConfig
-from smarticle_sim.benchmark import bare_loop, batch_loop, world_loop
+from smarticle_sim.benchmark import bare_loop, batch_loop, runner_loop
 from smarticle_sim.scenes import Scene, dense_scene, random_scene
 from smarticle_sim.settings import SimConfig
 
@@ -61,7 +61,7 @@ def mode_fn(mode: str, config: SimConfig, scene: Scene, periods: float,
     if mode == 'raw':
         return lambda: bare_loop(config, scene, periods, clock)
     if mode == 'world':
-        return lambda: world_loop(config, scene, periods, clock)
+        return lambda: runner_loop(config, scene, periods, clock)
     if mode == 'batch':
         return lambda: batch_loop(config, scene, periods, clock=clock)
     return lambda: batch_loop(config, scene, periods, 1, True, clock)
@@ -71,7 +71,7 @@ def best_of(fns: dict[str, Callable[[], tuple[int, float]]], repeats: int, clock
             progress: Progress | None = None, label: str = '') -> dict[str, tuple[int, float, float]]:
     """Run every callable ``repeats`` times, interleaved; keep each one's fastest run.
 
-    Values: (steps, seconds, seconds inside World.step -- 0 for the raw loop, which has none).
+    Values: (steps, seconds, seconds inside Physics.step -- 0 for the raw loop, which has none).
     """
     best: dict[str, tuple[int, float, float]] = {}
     for rep in range(repeats):
@@ -156,7 +156,7 @@ def main(argv: list[str] | None = None) -> int:
         config = base
         scene = dense_scene(config.robot, gait, 7, seed=1)
         best = best_of({'raw PyBullet loop': lambda: bare_loop(config, scene, p1_periods, clock),
-                        'World.run, no recording': lambda: world_loop(config, scene, p1_periods, clock),
+                        'Runner.run, no recording': lambda: runner_loop(config, scene, p1_periods, clock),
                         'batch core, CLI defaults': lambda: batch_loop(config, scene, p1_periods, clock=clock)},
                        repeats, clock, progress, 'P1')
         raw_rate = best['raw PyBullet loop'][0] / best['raw PyBullet loop'][1]

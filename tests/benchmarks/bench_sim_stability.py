@@ -3,7 +3,7 @@
 50 robots densely packed (hexagonal lattice, seeded headings, all in phase; the plate is enlarged to
 hold them) run up to ``--periods`` gait periods for every combination of physics time step (up to
 1/60 s, one step per control tick), gait amplitude alpha_max (up to 120 deg) and servo speed (x1, x3).
-The World's trouble checks run as usual (every ``trouble_every`` ticks); at each check this script also
+The Runner's trouble checks run as usual (every ``trouble_every`` ticks); at each check this script also
 reads the ground truth and keeps (including the value that fired a SimTrouble): the largest contact
 penetration, the largest body speed, and an
 energy-like indicator (total translational kinetic energy of the bodies; its max, and the mean over
@@ -39,10 +39,11 @@ from smarticle_sim.errors import SceneError, SimTrouble
 from smarticle_sim.geometry import robot_rects, robots_overlap
 from smarticle_sim.scenes import dense_scene
 from smarticle_sim.settings import SimConfig
-from smarticle_sim.world import World
+from smarticle_sim.physics import Physics
+from smarticle_sim.runner import Runner
 
 
-def silent_garbage(world: World) -> str:
+def silent_garbage(world: Physics) -> str:
     """'' if the final state is sane, else what is wrong (a check independent of the trouble detector)."""
     s = world.state()
     ph, spec = world.config.physics, world.config.robot
@@ -80,13 +81,14 @@ def run_setting(base: SimConfig, n: int, seed: int, rate: float, alpha_deg: floa
     kes: list[float] = []
     outcome = 'ok'
     start = time.perf_counter()
-    with World(config, scene) as world:
+    with Runner.with_gaits(config, scene) as run:
+        world = run.physics
         ticks = world.ticks_for(periods * gait.period)
         every = config.physics.trouble_every
-        world.start_gaits(0.0)
+        run.gaits.start(0.0)
         try:
             for i in range(1, ticks + 1):
-                world.tick()
+                run.tick()
                 if i % every == 0:
                     s = world.state()
                     _, depth = world.max_penetration()

@@ -1,17 +1,17 @@
 """What each skip saves: FSR for all robots vs some vs none, recording every tick vs decimated, trouble checks.
 
 One scene (7 robots dense, seed 1, by default) is run many ways in one process, interleaved, best of
-``--repeats``; each row gives the wall time and its cost against ``World.run`` (no extras) and against a
+``--repeats``; each row gives the wall time and its cost against ``Runner.run`` (no extras) and against a
 raw PyBullet loop of the same scene:
 
-* FSR (the sim bridge's per-robot FSR topics): ``World.fsr`` for all robots every control tick (60 Hz),
+* FSR (the sim bridge's per-robot FSR topics): ``Physics.fsr`` for all robots every control tick (60 Hz),
   for one robot (the only one listened to), none; and the robot-robot contact matrix every tick;
 * batch recording (``run_trial``): poses every tick, every 3 ticks (20 Hz, the default), every 6,
   every 30; poses + FSR + contacts every tick and at 20 Hz;
 * trouble checks: every tick, every 6 ticks (the default), every 60 ticks.
 
-Every run also times its own ``World.step`` calls, so each row reports the time spent outside the
-physics step on the same trajectory (steady even on a busy machine); the raw loop has no World.step.
+Every run also times its own ``Physics.step`` calls, so each row reports the time spent outside the
+physics step on the same trajectory (steady even on a busy machine); the raw loop has no Physics.step.
 Rendering does not exist yet, so it is not measured. Writes ``out/benchmarks/sim_skip.csv``.
 
     .venv/bin/python tests/benchmarks/bench_skip.py --quick
@@ -34,19 +34,21 @@ from smarticle_sim.batch import scene_period
 from smarticle_sim.benchmark import bare_loop, batch_loop
 from smarticle_sim.scenes import Scene, dense_scene
 from smarticle_sim.settings import SimConfig
-from smarticle_sim.world import World
+from smarticle_sim.physics import Physics
+from smarticle_sim.runner import Runner
 
 Loop = Callable[[], tuple[int, float]]
 
 
 def world_with(config: SimConfig, scene: Scene, periods: float,
-               per_tick: Callable[[World], object] | None = None,
+               per_tick: Callable[[Physics], object] | None = None,
                clock: Callable[[], float] = time.perf_counter) -> tuple[int, float]:
-    """World.tick loop calling ``per_tick(world)`` after every tick (e.g. an FSR read); timed."""
-    with World(config, scene) as world:
+    """Runner.tick loop calling ``per_tick(world)`` after every tick (e.g. an FSR read); timed."""
+    with Runner.with_gaits(config, scene) as run:
+        world = run.physics
         ticks = world.ticks_for(periods * scene_period(scene))
-        world.start_gaits(0.0)
-        tick = world.tick
+        run.gaits.start(0.0)
+        tick = run.tick
         start = clock()
         if per_tick is None:
             for _ in range(ticks):
@@ -63,7 +65,7 @@ def variants(config: SimConfig, scene: Scene, periods: float,
     """(group, name, loop) of every measured variant; the first two are the baselines."""
     one = [0]
 
-    def world(cfg: SimConfig = config, per_tick: Callable[[World], object] | None = None) -> Loop:
+    def world(cfg: SimConfig = config, per_tick: Callable[[Physics], object] | None = None) -> Loop:
         return lambda: world_with(cfg, scene, periods, per_tick, clock)
 
     def batch(every: int | None = None, fsr: bool = False) -> Loop:
@@ -71,7 +73,7 @@ def variants(config: SimConfig, scene: Scene, periods: float,
 
     return [
         ('baseline', 'raw PyBullet loop', lambda: bare_loop(config, scene, periods, clock)),
-        ('baseline', 'World.run: no FSR, no recording', world()),
+        ('baseline', 'Runner.run: no FSR, no recording', world()),
         ('FSR (bridge, 60 Hz)', 'FSR for all robots every tick', world(per_tick=lambda w: w.fsr())),
         ('FSR (bridge, 60 Hz)', 'FSR for 1 robot every tick', world(per_tick=lambda w: w.fsr(one))),
         ('FSR (bridge, 60 Hz)', 'contact matrix every tick', world(per_tick=lambda w: w.robot_contacts())),
@@ -120,7 +122,7 @@ def main(argv: list[str] | None = None) -> int:
         progress.step(f'repeat {rep + 1} done')
     dt = config.physics.time_step
     raw = best['raw PyBullet loop'][1] / best['raw PyBullet loop'][0]
-    world = best['World.run: no FSR, no recording'][1] / best['World.run: no FSR, no recording'][0]
+    world = best['Runner.run: no FSR, no recording'][1] / best['Runner.run: no FSR, no recording'][0]
     rows = []
     for group, name, _ in runs:
         steps, wall, inside = best[name]
@@ -132,9 +134,9 @@ def main(argv: list[str] | None = None) -> int:
     print(markdown_table(rows, [('group', 'group', ''), ('variant', 'variant', ''), ('wall_s', 'time (s)', '.2f'),
                                 ('real_time_factor', 'x real time', '.1f'),
                                 ('outside_physics', 'time outside stepSimulation', '+.1%'),
-                                ('cost_vs_world', 'vs World.run (separate runs)', '+.1%'),
+                                ('cost_vs_world', 'vs Runner.run (separate runs)', '+.1%'),
                                 ('cost_vs_raw', 'vs raw (separate runs)', '+.1%')]))
-    print('\n"time outside stepSimulation" = total / time inside World.step - 1, measured within each run '
+    print('\n"time outside stepSimulation" = total / time inside Physics.step - 1, measured within each run '
           '(the same trajectory): the steady measure of what the extras cost. The separate-run ratios '
           'include run-to-run noise of the shared machine (+-10 % or more).')
     path = write_csv(out_path('sim_skip.csv', args.out_dir), rows)

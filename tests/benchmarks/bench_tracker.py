@@ -28,7 +28,7 @@ from smarticle_driver.gait import GaitConfig
 from smarticle_sim.camera import CameraConfig, OverheadCamera
 from smarticle_sim.scenes import dense_scene
 from smarticle_sim.settings import SimConfig
-from smarticle_sim.world import World
+from smarticle_sim.runner import Runner
 from smarticle_tracking.calibrate_cli import sim_calibration
 from smarticle_tracking.tracker import TagTracker, TrackerConfig
 
@@ -40,11 +40,12 @@ def ground_truth(samples: int, seed: int = 1) -> list[tuple[np.ndarray, np.ndarr
     config = SimConfig.from_preset('small')
     gait = GaitConfig.from_degrees(90.0)
     out = []
-    with World(config, dense_scene(config.robot, gait, 7, seed=seed)) as world:
-        world.start_gaits(0.0)
+    with Runner.with_gaits(config, dense_scene(config.robot, gait, 7, seed=seed)) as run:
+        world = run.physics
+        run.gaits.start(0.0)
         ticks = world.ticks_for(0.4)
         for _ in range(samples):
-            world.run(ticks)
+            run.run(ticks)
             state = world.state()
             out.append((state.poses.copy(), state.arm_angles.copy()))
     return out

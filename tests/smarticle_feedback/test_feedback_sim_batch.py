@@ -1,5 +1,5 @@
-"""The sim path with the batch core (deterministic): World + gait cores + the impact controller calling
-World.halt, and the calibration tool on a recorded run."""
+"""The sim path with the batch core (deterministic): Runner + gait controller + the impact controller through
+GaitController.halt, and the calibration tool on a recorded run."""
 
 from __future__ import annotations
 

@@ -53,14 +53,14 @@ def test_unknown_parameter_is_refused() -> None:
 
 def drive_with_gait_cores(core: SimBridgeCore, gaits: list[SquareGait], periods: int) -> list[np.ndarray]:
     """Run the core as the lock-step ROS path does, with the gait cores answering every barrier."""
-    out = [core.world.poses().copy()]
+    out = [core.physics.poses().copy()]
     for _ in range(periods):
         for k, gait in enumerate(gaits):
             cmd = gait.command(core.time_ns * 1e-9)
             core.apply_command(k, list(topics.JOINT_NAMES), list(cmd.targets), [cmd.speed] * 2, core.time_ns)
         assert core.waiting_for() == []
         core.advance()
-        out.append(core.world.poses().copy())
+        out.append(core.physics.poses().copy())
     return out
 
 
@@ -71,7 +71,7 @@ def test_core_barrier_waits_for_every_robot_and_drops_bad_commands() -> None:
         bad = core.apply_command(0, ['arm1', 'arm2', 'tail'], [math.nan, 3.0, 0.0], [], core.time_ns)
         assert bad.counts == {'nonfinite_targets': 1, 'unknown_joints': 1, 'clamped_targets': 1}
         assert core.waiting_for() == [1]
-        assert np.all(np.isfinite(core.world.poses()))
+        assert np.all(np.isfinite(core.physics.poses()))
     finally:
         core.close()
 

@@ -32,7 +32,7 @@ def scenes() -> list[tuple[np.ndarray, np.ndarray]]:
         core = SimBridgeCore(BridgeSettings.defaults(scene=kind, seed=seed, robots=7))
         try:
             core.advance()
-            state = core.world.state()
+            state = core.physics.state()
             out.append((state.poses.copy(), state.arm_angles.copy()))
         finally:
             core.close()

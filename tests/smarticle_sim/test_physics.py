@@ -1,4 +1,4 @@
-"""The PyBullet world: bodies, servos, FSR faces, ground truth, determinism and trouble detection."""
+"""The physics: bodies, servos, FSR faces, ground truth, determinism and trouble detection."""
 
 from __future__ import annotations
 
@@ -15,7 +15,8 @@ from smarticle_sim.errors import SceneError, SimError, SimTrouble
 from smarticle_sim.scenes import RobotPlacement, Scene, dense_scene
 from smarticle_sim.settings import SMALL, SimConfig
 from smarticle_sim.trouble import check_state
-from smarticle_sim.world import ARM_JOINTS, World
+from smarticle_sim.physics import ARM_JOINTS, Physics
+from smarticle_sim.runner import Runner
 
 def lone_robot(heading: float = math.pi / 2, alpha1: float = 0.0, alpha2: float = 0.0,
                gait: GaitConfig | None = None) -> Scene:
@@ -24,7 +25,8 @@ def lone_robot(heading: float = math.pi / 2, alpha1: float = 0.0, alpha2: float 
 
 
 def test_bodies_have_the_specified_masses_and_sizes(config: SimConfig) -> None:
-    with World(config, lone_robot()) as world:
+    with Runner.with_gaits(config, lone_robot()) as run:
+        world = run.physics
         c, body = world.client, world.body_ids[0]
         masses = [c.getDynamicsInfo(body, link)[0] for link in (-1, 0, 1)]
         assert sum(masses) == pytest.approx(SMALL.total_mass)
@@ -42,7 +44,8 @@ def test_bodies_have_the_specified_masses_and_sizes(config: SimConfig) -> None:
 def test_bullet_gets_the_link_frictions_of_the_config(config: SimConfig) -> None:
     """Bullet multiplies the two links' values: arm-arm, arm-body and body-plate come out as configured."""
     config = config.with_physics(friction_arm_arm=1.5)
-    with World(config, lone_robot()) as world:
+    with Runner.with_gaits(config, lone_robot()) as run:
+        world = run.physics
         c, body = world.client, world.body_ids[0]
         friction = {link: c.getDynamicsInfo(body, link)[1] for link in (-1, *ARM_JOINTS)}
         plate = c.getDynamicsInfo(world.plate_id, -1)[1]
@@ -56,7 +59,8 @@ def test_bullet_gets_the_link_frictions_of_the_config(config: SimConfig) -> None
 def test_joint_angle_is_alpha_and_heading_is_the_normal(config: SimConfig) -> None:
     """alpha_i > 0 turns arm i's tip toward the body normal; the pose heading is that normal."""
     heading = 0.4
-    with World(config, lone_robot(heading, math.pi / 2, math.pi / 2)) as world:
+    with Runner.with_gaits(config, lone_robot(heading, math.pi / 2, math.pi / 2)) as run:
+        world = run.physics
         c, body = world.client, world.body_ids[0]
         x, y, h = world.poses()[0]
         assert h == pytest.approx(heading, abs=1e-6)
@@ -68,32 +72,32 @@ def test_joint_angle_is_alpha_and_heading_is_the_normal(config: SimConfig) -> No
 
 
 def test_servo_tracks_target_at_speed_limit(config: SimConfig) -> None:
-    with World(config, lone_robot()) as world:
-        world.set_joint_command(0, (1.0, -1.0), speed=5.0)
-        world.run(world.ticks_for(0.1))
+    with Runner.with_gaits(config, lone_robot()) as run:
+        world = run.physics
+        world.command(0, (1.0, -1.0), speed=5.0)
+        run.run(world.ticks_for(0.1))
         moved = world.arm_angles()[0]
         assert moved == pytest.approx([0.5, -0.5], abs=0.05)           # 5 rad/s for 0.1 s
         assert np.abs(world.arm_velocities()[0]) == pytest.approx([5.0, 5.0], rel=0.05)
-        world.run(world.ticks_for(0.3))
+        run.run(world.ticks_for(0.3))
         assert world.arm_angles()[0] == pytest.approx([1.0, -1.0], abs=0.01)
-        world.set_joint_command(0, (0.0, 0.0), speed=100.0)             # capped at the servo's top speed
-        world.run(1)
+        world.command(0, (0.0, 0.0), speed=100.0)             # capped at the servo's top speed
+        run.run(1)
         assert np.abs(world.arm_velocities()[0]).max() <= SMALL.servo_speed * 1.02
 
 
 def test_gait_core_drives_the_arms(config: SimConfig, gait90: GaitConfig) -> None:
     a = gait90.alpha_max
-    with World(config, lone_robot(alpha1=a, alpha2=a, gait=gait90)) as world:
-        with pytest.raises(SimError, match='own gait core'):
-            world.set_joint_command(0, (0.0, 0.0))
-        world.start_gaits(0.0)
-        world.run(world.ticks_for(0.4))            # quarter 0: arm 1 from +a to -a
+    with Runner.with_gaits(config, lone_robot(alpha1=a, alpha2=a, gait=gait90)) as run:
+        world = run.physics
+        run.gaits.start(0.0)
+        run.run(world.ticks_for(0.4))            # quarter 0: arm 1 from +a to -a
         assert world.arm_angles()[0] == pytest.approx([-a, a], abs=0.02)
-        world.run(world.ticks_for(0.4))            # quarter 1: arm 2 from +a to -a
+        run.run(world.ticks_for(0.4))            # quarter 1: arm 2 from +a to -a
         assert world.arm_angles()[0] == pytest.approx([-a, -a], abs=0.02)
-        assert world.halt(0)
+        assert run.gaits.halt(0)
         held = world.arm_angles()[0].copy()
-        world.run(world.ticks_for(0.3))
+        run.run(world.ticks_for(0.3))
         assert world.arm_angles()[0] == pytest.approx(held, abs=0.02)
 
 
@@ -101,10 +105,11 @@ def test_arms_never_touch_the_plate(gait90: GaitConfig) -> None:
     """Even with arm-plate collisions enabled, a running gait leaves the arms clear of the plate."""
     config = SimConfig().with_physics(arm_plate_collision=True)
     scene = dense_scene(config.robot, gait90, 3, seed=2)
-    with World(config, scene) as world:
-        world.start_gaits(0.0)
+    with Runner.with_gaits(config, scene) as run:
+        world = run.physics
+        run.gaits.start(0.0)
         for _ in range(world.ticks_for(3.2)):
-            world.tick()
+            run.tick()
             for body in world.body_ids:
                 for link in ARM_JOINTS:
                     touching = world.client.getContactPoints(bodyA=body, bodyB=world.plate_id,
@@ -117,7 +122,8 @@ def test_arms_never_touch_the_plate(gait90: GaitConfig) -> None:
 def test_fsr_push_shows_on_one_face_only(config: SimConfig, arm: int, side: int) -> None:
     """A fixed block beside one arm: turning the arm into it loads that face and no other."""
     heavy = replace(config, robot=replace(SMALL, total_mass=5.0))   # friction then holds the body still
-    with World(heavy, lone_robot()) as world:
+    with Runner.with_gaits(heavy, lone_robot()) as run:
+        world = run.physics
         c = world.client
         x_sign = -1.0 if arm == 0 else 1.0
         centre = [x_sign * (SMALL.body_width / 2 + 0.035), side * 0.009, SMALL.body_height / 2]
@@ -125,8 +131,8 @@ def test_fsr_push_shows_on_one_face_only(config: SimConfig, arm: int, side: int)
         c.createMultiBody(0.0, block, -1, centre)
         targets = [0.0, 0.0]
         targets[arm] = side * 0.6                  # alpha > 0 turns toward +y: the front face leads
-        world.set_joint_command(0, (targets[0], targets[1]))
-        world.run(world.ticks_for(0.3))
+        world.command(0, (targets[0], targets[1]))
+        run.run(world.ticks_for(0.3))
         forces = world.fsr([0])[0]
         face = 2 * arm + (0 if side > 0 else 1)
         assert forces[face] > 0.5, dict(zip(FSR_FACES, forces, strict=True))
@@ -136,11 +142,12 @@ def test_fsr_push_shows_on_one_face_only(config: SimConfig, arm: int, side: int)
 
 def test_robot_contacts_and_penetration(config: SimConfig, gait90: GaitConfig) -> None:
     scene = dense_scene(config.robot, gait90, 7, seed=1)
-    with World(config, scene) as world:
-        world.start_gaits(0.0)
+    with Runner.with_gaits(config, scene) as run:
+        world = run.physics
+        run.gaits.start(0.0)
         seen = np.zeros((7, 7), dtype=bool)
         for _ in range(world.ticks_for(1.6)):
-            world.tick()
+            run.tick()
             touching = world.robot_contacts()
             assert (touching == touching.T).all() and not touching.diagonal().any()
             seen |= touching
@@ -150,11 +157,12 @@ def test_robot_contacts_and_penetration(config: SimConfig, gait90: GaitConfig) -
 
 def test_same_seed_same_trajectory(config: SimConfig, gait90: GaitConfig) -> None:
     def trajectory(seed: int) -> np.ndarray:
-        with World(config, dense_scene(config.robot, gait90, 7, seed=seed)) as world:
-            world.start_gaits(0.0)
+        with Runner.with_gaits(config, dense_scene(config.robot, gait90, 7, seed=seed)) as run:
+            world = run.physics
+            run.gaits.start(0.0)
             out = []
             for _ in range(world.ticks_for(1.6)):
-                world.tick()
+                run.tick()
                 out.append(np.concatenate([world.poses().ravel(), world.arm_angles().ravel()]))
             return np.array(out)
 
@@ -164,27 +172,29 @@ def test_same_seed_same_trajectory(config: SimConfig, gait90: GaitConfig) -> Non
 
 
 def test_unknown_robot_and_bad_commands_refused(config: SimConfig) -> None:
-    with World(config, lone_robot()) as world:
+    with Runner.with_gaits(config, lone_robot()) as run:
+        world = run.physics
         with pytest.raises(SceneError, match='unknown robot 3'):
-            world.set_joint_command(3, (0.0, 0.0))
+            world.command(3, (0.0, 0.0))
         with pytest.raises(SimError, match='finite'):
-            world.set_joint_command(0, (math.nan, 0.0))
+            world.command(0, (math.nan, 0.0))
         with pytest.raises(SimError, match='speed'):
-            world.set_joint_command(0, (0.0, 0.0), speed=-1.0)
+            world.command(0, (0.0, 0.0), speed=-1.0)
 
 
 def test_overlapping_scene_not_simulated(config: SimConfig) -> None:
     scene = Scene((RobotPlacement(0.0, 0.0, 0.0), RobotPlacement(0.01, 0.01, 0.0)))
     with pytest.raises(SceneError, match='overlap'):
-        World(config, scene)
+        Physics(config, scene)
 
 
 def test_trouble_on_injected_nan(config: SimConfig) -> None:
-    with World(config, Scene((RobotPlacement(-0.1, 0.0, 0.0), RobotPlacement(0.1, 0.0, 0.0)))) as world:
-        world.run(6)
+    with Runner.with_gaits(config, Scene((RobotPlacement(-0.1, 0.0, 0.0), RobotPlacement(0.1, 0.0, 0.0)))) as run:
+        world = run.physics
+        run.run(6)
         world.client.resetBaseVelocity(world.body_ids[1], [math.nan, 0.0, 0.0], [0.0, 0.0, 0.0])
         with pytest.raises(SimTrouble) as info:
-            world.run(12)
+            run.run(12)
         assert info.value.robot == 1 and 'not finite' in str(info.value)
         assert 'robot 1 at t =' in str(info.value)
 
@@ -194,13 +204,14 @@ def test_trouble_on_lasting_penetration_not_on_a_spike(config: SimConfig, monkey
     scene = Scene((RobotPlacement(-0.1, 0.0, math.pi / 2), RobotPlacement(0.1, 0.0, math.pi / 2)))
     every = config.physics.trouble_every
     deep = config.physics.max_penetration * 1.5
-    with World(config, scene) as world:
+    with Runner.with_gaits(config, scene) as run:
+        world = run.physics
         depths = iter([deep, 0.0, deep, deep, 0.0, deep, deep, deep])
         monkeypatch.setattr(world, 'max_penetration', lambda: (1, next(depths)))
-        world.run(5 * every)                     # deep at checks 1, 3, 4: never 3 in a row
+        run.run(5 * every)                     # deep at checks 1, 3, 4: never 3 in a row
         with pytest.raises(SimTrouble, match=r'robot 1 .* penetration depth .* 3 checks in a row: bodies are '
                                              r'tunnelling'):
-            world.run(3 * every)
+            run.run(3 * every)
 
 
 def test_trouble_check_names_robot_time_quantity(config: SimConfig) -> None:
@@ -218,7 +229,8 @@ def test_trouble_check_names_robot_time_quantity(config: SimConfig) -> None:
 
 def test_trouble_on_absurd_time_step(gait90: GaitConfig) -> None:
     config = SimConfig().with_physics(time_step=0.1, control_tick=0.1, trouble_every=1)
-    with World(config, dense_scene(config.robot, gait90, 7, seed=1)) as world:
-        world.start_gaits(0.0)
+    with Runner.with_gaits(config, dense_scene(config.robot, gait90, 7, seed=1)) as run:
+        world = run.physics
+        run.gaits.start(0.0)
         with pytest.raises(SimTrouble):
-            world.run(world.ticks_for(16.0))
+            run.run(world.ticks_for(16.0))

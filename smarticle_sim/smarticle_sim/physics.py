@@ -1,13 +1,16 @@
-"""The physics wrapper: a PyBullet world of smarticles on a plate, driven by servo commands or gait cores.
+"""The physics of a run: a PyBullet world of smarticles on a plate (bodies, joints, contacts, sensors).
 
-Each World owns its PyBullet client (``BulletClient(DIRECT)``), never the implicit global one, so
+``Physics`` knows nothing of gaits or feedback: it takes servo commands, steps and reports ground truth,
+FSR forces, contacts and trouble. What acts on the robots (gait cores, the feedback controller, a
+bridge's external commands) and the loop that steps it live in ``runner.py``.
+
+Each Physics owns its PyBullet client (``BulletClient(DIRECT)``), never the implicit global one, so
 several worlds can live in one process. A robot is one multibody: the body box as the base, resting on
 the plate, and two arm boxes on revolute joints at the body's ends. Joint 0 is arm 1 (at body -x, axis
 -z) and joint 1 is arm 2 (at +x, axis +z), so each joint position *is* the gait's alpha_i. Arms hang
 ``arm_clearance`` above the plate and their collisions with the plate are filtered out.
 
-Per-tick Python work is kept small: motor commands are sent only when a target or speed changes, a
-gait core is asked for a new command only at its quarter boundaries (or after a halt or start), state
+Per-tick Python work is kept small: motor commands are sent only when a target or speed changes, state
 is read with one pass of batched calls and cached until the next step, and FSR forces and contacts are
 computed only when asked for.
 """
@@ -23,7 +26,6 @@ from typing import Sequence
 import numpy as np
 import pybullet
 from pybullet_utils.bullet_client import BulletClient
-from smarticle_driver.gait import GaitConfig, SquareGait
 from smarticle_driver.topics import FSR_FACES
 
 from .settings import SimConfig
@@ -33,12 +35,10 @@ from .trouble import check_penetration, check_state
 
 #: Joint index of arm 1 and arm 2 (also their link indices); the body is link -1.
 ARM_JOINTS: tuple[int, int] = (0, 1)
-#: A gait quarter boundary this close (s) after a tick's time is taken at that tick.
-_TIME_EPS = 1e-9
 
 
 @dataclass(frozen=True)
-class WorldState:
+class PhysicsState:
     """Ground truth of all robots at one instant (arrays indexed by robot id)."""
 
     time: float
@@ -50,8 +50,8 @@ class WorldState:
     arm_velocities: np.ndarray  # (N, 2): d alpha / dt (rad/s)
 
 
-class World:
-    """N smarticles on a plate in their own PyBullet client; step it, command it, read ground truth."""
+class Physics:
+    """N smarticles on a plate in their own PyBullet client; step it, command its servos, read ground truth."""
 
     def __init__(self, config: SimConfig, scene: Scene) -> None:
         scene.validate(config.robot, config.physics.plate_size)
@@ -61,15 +61,10 @@ class World:
         self._steps_per_tick = config.physics.steps_per_tick
         self._client = _quiet_client()
         self._step_count = 0
-        self._tick_count = 0
-        self._state: WorldState | None = None
+        self._state: PhysicsState | None = None
         self._last_check: tuple[float, np.ndarray | None] = (0.0, None)
         self._deep_checks = 0          # trouble checks in a row with a contact deeper than max_penetration
         n = len(scene.robots)
-        self._gaits: list[SquareGait | None] = [
-            SquareGait(r.gait) if r.gait is not None else None for r in scene.robots]
-        self._next_gait_update = np.full(n, math.inf)
-        self._next_due = math.inf   # min of _next_gait_update (or earlier): most ticks need no gait work
         self._commands: list[list[tuple[float, float] | None]] = [[None, None] for _ in range(n)]
         self._build()
 
@@ -140,7 +135,7 @@ class World:
         self.body_ids: tuple[int, ...] = tuple(ids)
         self._robot_of_body = {b: k for k, b in enumerate(ids)}
         for k, placement in enumerate(self.scene.robots):
-            self._send(k, (placement.alpha1, placement.alpha2), spec.servo_speed)
+            self.send(k, (placement.alpha1, placement.alpha2), spec.servo_speed)
 
     # ----------------------------------------------------------------- properties
     @property
@@ -168,58 +163,31 @@ class World:
         """Physics steps per control tick."""
         return self._steps_per_tick
 
-    def gait(self, robot: int) -> SquareGait | None:
-        """The gait core driving ``robot``, or None if it follows external joint commands."""
-        return self._gaits[self._check_robot(robot)]
+    @property
+    def control_tick(self) -> float:
+        """Seconds of sim time in one control tick."""
+        return self._physics.control_tick
 
     # ----------------------------------------------------------------- commands
-    def set_gait(self, robot: int, gait: GaitConfig | None) -> None:
-        """Let ``robot`` run its own gait core (not started yet), or None to take external commands."""
-        k = self._check_robot(robot)
-        self._gaits[k] = SquareGait(gait) if gait is not None else None
-        self._next_gait_update[k] = math.inf
-
-    def start_gaits(self, t0: float | None = None, robots: Sequence[int] | None = None) -> None:
-        """Start the gait cores (all, or ``robots``) at sim time ``t0`` (default: now)."""
-        start = self.time if t0 is None else float(t0)
-        for k in self._robot_list(robots):
-            gait = self._gaits[k]
-            if gait is not None:
-                gait.start(start)
-                self._next_gait_update[k] = start
-                self._next_due = min(self._next_due, start)
-
-    def halt(self, robot: int) -> bool:
-        """Halt ``robot``'s gait now (arms hold; resume at its next period); False if not running."""
-        k = self._check_robot(robot)
-        gait = self._gaits[k]
-        if gait is None or not gait.halt(self.time):
-            return False
-        self._hold_arms(k)
-        self._next_gait_update[k] = self.time
-        self._next_due = min(self._next_due, self.time)
-        return True
-
-    def set_joint_command(self, robot: int, targets: tuple[float, float], speed: float | None = None) -> None:
+    def command(self, robot: int, targets: tuple[float, float], speed: float | None = None) -> None:
         """Command ``robot``'s servos: arm targets (rad) and speed limit (rad/s, capped at the servo's)."""
-        k = self._check_robot(robot)
-        if self._gaits[k] is not None:
-            raise SimError(f'robot {k} runs its own gait core; call set_gait({k}, None) before commanding it')
+        k = self.check_robot(robot)
         t1, t2 = float(targets[0]), float(targets[1])
         spd = self.config.robot.servo_speed if speed is None else float(speed)
         if not (math.isfinite(t1) and math.isfinite(t2)):
             raise SimError(f'robot {k}: joint targets must be finite, got {targets!r}')
         if not (math.isfinite(spd) and spd > 0.0):
             raise SimError(f'robot {k}: speed limit must be > 0 rad/s, got {speed!r}')
-        self._send(k, (t1, t2), spd)
+        self.send(k, (t1, t2), spd)
 
-    def _hold_arms(self, k: int) -> None:
-        """Command both arms of robot ``k`` to stay where they are now."""
+    def hold_arms(self, robot: int) -> None:
+        """Command both arms of ``robot`` to stay where they are now."""
+        k = self.check_robot(robot)
         js = self._client.getJointStates(self.body_ids[k], ARM_JOINTS)
-        self._send(k, (js[0][0], js[1][0]), self.config.robot.servo_speed)
+        self.send(k, (js[0][0], js[1][0]), self.config.robot.servo_speed)
 
-    def _send(self, k: int, targets: tuple[float, float], speed: float) -> None:
-        """Send servo commands of robot ``k``, only for joints whose target or speed changed."""
+    def send(self, k: int, targets: tuple[float, float], speed: float) -> None:
+        """Send servo commands of robot ``k`` (unchecked: for controllers), only for joints that changed."""
         speed = min(speed, self.config.robot.servo_speed)
         last = self._commands[k]
         for j in ARM_JOINTS:
@@ -232,55 +200,21 @@ class World:
                 positionGain=self._physics.position_gain, velocityGain=1.0)
             last[j] = command
 
-    def _update_gaits(self) -> None:
-        """Ask the gait cores whose quarter has ended (or that were started or halted) for new targets."""
-        now = self.time
-        if now + _TIME_EPS < self._next_due:
-            return
-        due = np.flatnonzero(self._next_gait_update <= now + _TIME_EPS)
-        for k in due:
-            gait = self._gaits[k]
-            if gait is None:
-                self._next_gait_update[k] = math.inf
-                continue
-            t = max(now, gait.start_time if gait.start_time is not None else now)
-            command = gait.command(t + _TIME_EPS)
-            if not command.halted:  # a halted robot keeps holding the angles it had when it stopped
-                self._send(int(k), command.targets, command.speed)
-            tau = gait.gait_time(t + _TIME_EPS)
-            next_tau = (math.floor(4.0 * tau) + 1) / 4.0
-            cfg = gait.config
-            self._next_gait_update[k] = gait.start_time + (next_tau - cfg.phase) * cfg.period  # type: ignore[operator]
-        self._next_due = float(self._next_gait_update.min())
-
     # ----------------------------------------------------------------- stepping
     def step(self, n: int = 1) -> None:
-        """Advance ``n`` physics steps (no gait update, no trouble check)."""
+        """Advance ``n`` physics steps (the runner adds controllers and trouble checks around them)."""
         step = self._client.stepSimulation
         for _ in range(n):
             step()
         self._step_count += n
         self._state = None
 
-    def tick(self) -> None:
-        """One control tick: update gait commands, step the physics, check for trouble."""
-        self._update_gaits()
-        self.step(self._steps_per_tick)
-        self._tick_count += 1
-        if self._tick_count % self._physics.trouble_every == 0:
-            self.check_trouble()
-
-    def run(self, ticks: int) -> None:
-        """Run ``ticks`` control ticks."""
-        for _ in range(ticks):
-            self.tick()
-
     def ticks_for(self, seconds: float) -> int:
         """Number of control ticks in ``seconds`` of sim time (rounded)."""
         return round(seconds / self._physics.control_tick)
 
     # ----------------------------------------------------------------- ground truth
-    def state(self) -> WorldState:
+    def state(self) -> PhysicsState:
         """Ground truth of all robots now (read once per step, then cached)."""
         if self._state is None:
             self._state = self._read_state()
@@ -307,7 +241,7 @@ class World:
             pos[k], quat[k] = base_pose(body)
         return pos, quat
 
-    def _read_state(self) -> WorldState:
+    def _read_state(self) -> PhysicsState:
         """Read every robot's base pose, velocity and joint states."""
         c = self._client
         n = self.n_robots
@@ -323,7 +257,7 @@ class World:
             arm_vel[k] = v1, v2
         heading, tilt = _heading_and_tilt(quat)
         poses = np.column_stack([pos[:, 0], pos[:, 1], heading])
-        return WorldState(self.time, poses, pos, tilt, np.linalg.norm(vel, axis=1), arms, arm_vel)
+        return PhysicsState(self.time, poses, pos, tilt, np.linalg.norm(vel, axis=1), arms, arm_vel)
 
     # ----------------------------------------------------------------- contacts and FSR
     def fsr(self, robots: Sequence[int] | None = None) -> np.ndarray:
@@ -333,7 +267,7 @@ class World:
         i.e. the arm link's +y side) when its force pushes the arm toward -y, else toward ``back``; only
         the component of the contact force along the face normal counts.
         """
-        ks = self._robot_list(robots)
+        ks = self.robot_list(robots)
         out = np.zeros((len(ks), len(FSR_FACES)))
         c = self._client
         for row, k in enumerate(ks):
@@ -405,18 +339,18 @@ class World:
         self._deep_checks = check_penetration(now, robot, depth, self._physics, self._deep_checks)
 
     # ----------------------------------------------------------------- housekeeping
-    def _check_robot(self, robot: int) -> int:
+    def check_robot(self, robot: int) -> int:
         """Return ``robot`` as an index or raise SceneError."""
         if isinstance(robot, bool) or not isinstance(robot, (int, np.integer)) \
                 or not 0 <= robot < self.n_robots:
             raise SceneError(f'unknown robot {robot!r}: this world has robots 0..{self.n_robots - 1}')
         return int(robot)
 
-    def _robot_list(self, robots: Sequence[int] | None) -> list[int]:
+    def robot_list(self, robots: Sequence[int] | None) -> list[int]:
         """All robots, or the given ones checked."""
         if robots is None:
             return list(range(self.n_robots))
-        return [self._check_robot(k) for k in robots]
+        return [self.check_robot(k) for k in robots]
 
     def close(self) -> None:
         """Disconnect the PyBullet client (idempotent)."""
@@ -428,12 +362,12 @@ class World:
                 pass
             self._client = None
 
-    def __enter__(self) -> World:
-        """Context manager: the world closes on exit."""
+    def __enter__(self) -> Physics:
+        """Context manager: the physics client closes on exit."""
         return self
 
     def __exit__(self, *exc: object) -> None:
-        """Close the world."""
+        """Disconnect the client."""
         self.close()
 
 

@@ -1,0 +1,234 @@
+"""The one stepping loop: a ``Runner`` owns the tick, its controllers, trouble checks and observer hooks.
+
+Modelled on dm_control's ``rl/control.py``: the physics (``physics.Physics``) knows bodies, joints,
+contacts and sensors; what acts on the robots is a *controller* plugged into the runner; the runner's
+``tick`` is the only place that steps the physics:
+
+1. every controller's ``before_tick(runner)``, in the order given (e.g. the feedback controller, whose
+   halts the gait controller then respects, before the gait controller);
+2. ``physics.step(steps_per_tick)``;
+3. a trouble check every ``trouble_every`` ticks (``SimTrouble`` propagates to the caller).
+
+``Runner.run`` adds observer hooks (sampling, progress) called every k ticks, and an early stop.
+The batch trial (``batch.run_trial``), the sim bridge (``bridge.SimBridgeCore``), the experiments and
+the benchmarks all step through it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+from smarticle_driver.gait import GaitConfig, SquareGait
+
+from .physics import Physics
+from .scenes import Scene
+from .settings import SimConfig
+
+#: A gait quarter boundary this close (s) after a tick's time is taken at that tick.
+_TIME_EPS = 1e-9
+
+
+class Controller(Protocol):
+    """Anything that acts on the robots once per control tick, before the physics steps."""
+
+    def before_tick(self, runner: Runner) -> None:
+        """Read sensors from ``runner.physics`` and send commands (the time is ``runner.time``)."""
+
+
+@dataclass(frozen=True)
+class Hook:
+    """An observer called every ``every`` ticks of ``Runner.run`` (and before the first tick if ``at_start``)."""
+
+    every: int
+    call: Callable[[Runner], None]
+    at_start: bool = True
+
+
+class Runner:
+    """Steps a ``Physics`` one control tick at a time with its controllers and trouble checks."""
+
+    def __init__(self, physics: Physics, controllers: Sequence[Controller] = ()) -> None:
+        self.physics = physics
+        self.controllers: list[Controller] = list(controllers)
+        #: The gait controller among ``controllers``, when built by ``with_gaits``.
+        self.gaits: GaitController | None = None
+        self.tick_count = 0
+        self._steps_per_tick = physics.steps_per_tick
+        self._trouble_every = physics.config.physics.trouble_every
+
+    @classmethod
+    def with_gaits(cls, config: SimConfig, scene: Scene, before: Sequence[Controller] = ()) -> Runner:
+        """A new Physics of ``scene`` stepped with each robot's gait (``runner.gaits``), after ``before``."""
+        physics = Physics(config, scene)
+        gaits = GaitController.for_scene(physics)
+        runner = cls(physics, [*before, gaits])
+        runner.gaits = gaits
+        return runner
+
+    @property
+    def time(self) -> float:
+        """Sim time (s)."""
+        return self.physics.time
+
+    def tick(self) -> None:
+        """One control tick: controllers act, the physics steps, every few ticks a trouble check."""
+        for controller in self.controllers:
+            controller.before_tick(self)
+        self.physics.step(self._steps_per_tick)
+        self.tick_count += 1
+        if self.tick_count % self._trouble_every == 0:
+            self.physics.check_trouble()
+
+    def run(self, ticks: int, hooks: Sequence[Hook] = (), stop: Callable[[Runner], bool] | None = None) -> int:
+        """Run up to ``ticks`` ticks with observer ``hooks``; return the ticks run (fewer if ``stop`` said so).
+
+        A hook with ``at_start`` is called once before the first tick; then each hook is called after
+        every ``hook.every``-th tick of this run. ``stop`` is asked after every tick (and its hooks).
+        ``SimTrouble`` propagates: what the hooks have seen so far is the caller's to keep.
+        """
+        for hook in hooks:
+            if hook.every < 1:
+                raise ValueError(f'Hook.every must be >= 1 tick, got {hook.every!r}')
+            if hook.at_start:
+                hook.call(self)
+        tick = self.tick
+        for i in range(1, ticks + 1):
+            tick()
+            for hook in hooks:
+                if i % hook.every == 0:
+                    hook.call(self)
+            if stop is not None and stop(self):
+                return i
+        return ticks
+
+    def ticks_for(self, seconds: float) -> int:
+        """Number of control ticks in ``seconds`` of sim time (rounded)."""
+        return self.physics.ticks_for(seconds)
+
+    def close(self) -> None:
+        """Close the physics (idempotent)."""
+        self.physics.close()
+
+    def __enter__(self) -> Runner:
+        """Context manager: the physics closes on exit."""
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        """Close the physics."""
+        self.close()
+
+
+class GaitController:
+    """Runs each robot's square gait core: new servo targets at quarter boundaries, after a start or halt.
+
+    A gait core is asked for a command only when its quarter has ended (or it was started or halted),
+    so most ticks cost one comparison. Robots without a gait config take no commands from here.
+    """
+
+    def __init__(self, physics: Physics, gaits: Sequence[GaitConfig | None]) -> None:
+        if len(gaits) != physics.n_robots:
+            raise ValueError(f'GaitController: {len(gaits)} gait configs for {physics.n_robots} robots')
+        self.physics = physics
+        self._gaits: list[SquareGait | None] = [SquareGait(g) if g is not None else None for g in gaits]
+        self._next_update = np.full(len(gaits), math.inf)
+        self._next_due = math.inf   # min of _next_update (or earlier): most ticks need no gait work
+
+    @classmethod
+    def for_scene(cls, physics: Physics) -> GaitController:
+        """A controller running the gait each robot of the physics' scene was placed with."""
+        return cls(physics, [r.gait for r in physics.scene.robots])
+
+    def gait(self, robot: int) -> SquareGait | None:
+        """The gait core driving ``robot``, or None if it takes no gait commands."""
+        return self._gaits[self.physics.check_robot(robot)]
+
+    def start(self, t0: float | None = None, robots: Sequence[int] | None = None) -> None:
+        """Start the gait cores (all, or ``robots``) at sim time ``t0`` (default: now)."""
+        start = self.physics.time if t0 is None else float(t0)
+        for k in self.physics.robot_list(robots):
+            gait = self._gaits[k]
+            if gait is not None:
+                gait.start(start)
+                self._next_update[k] = start
+                self._next_due = min(self._next_due, start)
+
+    def halt(self, robot: int) -> bool:
+        """Halt ``robot``'s gait now (arms hold; resume at its next period); False if not running."""
+        k = self.physics.check_robot(robot)
+        gait = self._gaits[k]
+        now = self.physics.time
+        if gait is None or not gait.halt(now):
+            return False
+        self.physics.hold_arms(k)
+        self._next_update[k] = now
+        self._next_due = min(self._next_due, now)
+        return True
+
+    def before_tick(self, runner: Runner) -> None:
+        """Ask the gait cores whose quarter has ended (or that were started or halted) for new targets."""
+        physics = self.physics
+        now = physics.time
+        if now + _TIME_EPS < self._next_due:
+            return
+        due = np.flatnonzero(self._next_update <= now + _TIME_EPS)
+        for k in due:
+            gait = self._gaits[k]
+            if gait is None:
+                self._next_update[k] = math.inf
+                continue
+            t = max(now, gait.start_time if gait.start_time is not None else now)
+            command = gait.command(t + _TIME_EPS)
+            if not command.halted:  # a halted robot keeps holding the angles it had when it stopped
+                physics.send(int(k), command.targets, command.speed)
+            tau = gait.gait_time(t + _TIME_EPS)
+            next_tau = (math.floor(4.0 * tau) + 1) / 4.0
+            cfg = gait.config
+            self._next_update[k] = gait.start_time + (next_tau - cfg.phase) * cfg.period  # type: ignore[operator]
+        self._next_due = float(self._next_update.min())
+
+
+class Decision(Protocol):
+    """What a feedback policy answers for one FSR sample."""
+
+    @property
+    def halt(self) -> bool:
+        """True to stop the arms now."""
+
+    @property
+    def face(self) -> str | None:
+        """The FSR face that triggered the halt, if any."""
+
+
+class FeedbackPolicy(Protocol):
+    """A per-robot tactile policy (e.g. ``smarticle_feedback.controller.ImpactController``)."""
+
+    def update(self, time: float, forces: np.ndarray) -> Decision:
+        """Take one FSR sample (forces in N, faces in ``FSR_FACES`` order) at sim ``time``."""
+
+
+class FeedbackController:
+    """Feeds every tick's FSR forces to per-robot policies; a halt decision halts that robot's gait.
+
+    Put it before the ``GaitController`` in the runner's controllers, so that a halt is part of the tick
+    it was decided in. Halts that took effect are listed in ``halts`` as (time, robot, face).
+    """
+
+    def __init__(self, gaits: GaitController, policies: Mapping[int, FeedbackPolicy]) -> None:
+        self.gaits = gaits
+        self.policies = dict(policies)
+        self._robots = sorted(self.policies)
+        self.halts: list[tuple[float, int, str]] = []
+
+    def before_tick(self, runner: Runner) -> None:
+        """Read the FSR forces of the policies' robots and halt where a policy says so."""
+        physics = self.gaits.physics
+        now = physics.time
+        forces = physics.fsr(self._robots)
+        for row, k in enumerate(self._robots):
+            decision = self.policies[k].update(now, forces[row])
+            if decision.halt and self.gaits.halt(k):
+                self.halts.append((now, k, decision.face or ''))
