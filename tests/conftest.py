@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Callable, Iterator
 
 import pytest
-from smarticle_driver.launching import DomainReservation, ProcessGroup, executable
+from smarticle_common.launching import DomainReservation, ProcessGroup, executable
 
 __all__ = ['executable', 'spin_until']
 

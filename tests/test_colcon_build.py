@@ -74,7 +74,7 @@ def test_built_gait_executable_runs_from_the_install_space_and_publishes(install
     import rclpy
     from sensor_msgs.msg import JointState
 
-    from smarticle_driver import topics
+    from smarticle_common import topics
 
     env = {**sourced_env(install_space), 'ROS_DOMAIN_ID': os.environ['ROS_DOMAIN_ID'],
            'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST'}

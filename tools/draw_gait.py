@@ -14,7 +14,7 @@ matplotlib.use('Agg')
 import matplotlib.pyplot as plt
 import numpy as np
 
-from smarticle_driver.gait import GaitConfig, SquareGait
+from smarticle_common.gait import GaitConfig, SquareGait
 
 BODY_W, ARM_L = 5.4, 5.0
 

@@ -25,14 +25,15 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from smarticle_driver.launching import DomainReservation, ProcessGroup, isolated_ros_env
+from smarticle_common.launching import DomainReservation, ProcessGroup, isolated_ros_env
 
 from smarticle_bags.info import format_info
 from smarticle_bags.reader import BagReader
 from smarticle_bags.recording import start_recording
+from smarticle_common.facts import GAIT_PERIOD
 
 ROOT = Path(__file__).resolve().parents[2]
-ALPHA_MAX, PERIOD, START_AT = 90.0, 1.6, 0.5
+ALPHA_MAX, PERIOD, START_AT = 90.0, GAIT_PERIOD, 0.5
 
 
 @dataclass(frozen=True)

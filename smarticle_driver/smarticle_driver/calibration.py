@@ -33,7 +33,7 @@ from typing import Any, Protocol
 
 import yaml
 
-from smarticle_driver import topics
+from smarticle_common import topics
 from smarticle_driver.errors import CalibrationError
 
 #: Longest pulse a Maestro can emit (14-bit quarter-microseconds).

@@ -24,7 +24,8 @@ import time
 from pathlib import Path
 from typing import Any, TextIO
 
-from smarticle_driver import maestro, topics
+from smarticle_common import topics
+from smarticle_driver import maestro
 from smarticle_driver.calibration import (FsrModel, ServoCalibration, default_config_dir,
                                           load_fsr_calibration, load_servo_calibration)
 from smarticle_driver.emulator import EmulatorError, MaestroEmulator, TargetRecord

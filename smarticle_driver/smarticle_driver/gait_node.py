@@ -12,18 +12,18 @@ from typing import Any
 from rclpy.node import Node
 from rclpy.time import Time
 
-from smarticle_driver import topics
-from smarticle_driver.gait import (DEFAULT_PERIOD, DEFAULT_SERVO_SPEED, GaitCommand, GaitConfig, GaitError,
-                                   SquareGait)
-from smarticle_driver.params import ParamSpec, ParameterError, declare_and_read, spin_node
+from smarticle_common import topics
+from smarticle_common.facts import GAIT_PERIOD, SERVO_SPEED
+from smarticle_common.gait import GaitCommand, GaitConfig, GaitError, SquareGait
+from smarticle_common.params import ParamSpec, ParameterError, declare_and_read, spin_node
 
 NODE_NAME = 'gait'
 
 PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec('robot_id', 0, 'robot id k: topics live under /smarticle_<k>', 0, topics.MAX_ROBOT_ID),
     ParamSpec('alpha_max_deg', 90.0, 'square-gait amplitude alpha_max in degrees (5 to 120)', 5.0, 120.0),
-    ParamSpec('period', DEFAULT_PERIOD, 'gait period T in seconds', 0.05, 60.0),
-    ParamSpec('servo_speed', DEFAULT_SERVO_SPEED, 'servo speed limit in rad/s', 0.1, 100.0),
+    ParamSpec('period', GAIT_PERIOD, 'gait period T in seconds', 0.05, 60.0),
+    ParamSpec('servo_speed', SERVO_SPEED, 'servo speed limit in rad/s', 0.1, 100.0),
     ParamSpec('phase', 0.0, 'phase offset as a fraction of a period, in [0, 1)', 0.0, 0.999999),
     ParamSpec('tick_rate', 100.0, 'how often the gait is evaluated, Hz', 1.0, 1000.0),
     ParamSpec('heartbeat', 0.2, 'republish the unchanged command after this many seconds', 0.005, 10.0),
@@ -43,7 +43,7 @@ def config_from_params(values: dict[str, Any]) -> GaitConfig:
 
 
 class GaitNode(Node):
-    """Thin ROS shell around smarticle_driver.gait.SquareGait."""
+    """Thin ROS shell around smarticle_common.gait.SquareGait."""
 
     def __init__(self) -> None:
         super().__init__(NODE_NAME)

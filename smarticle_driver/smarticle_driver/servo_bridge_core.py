@@ -22,14 +22,14 @@ from enum import IntEnum
 from pathlib import Path
 from typing import Any
 
-from smarticle_driver import topics
+from smarticle_common import topics
 from smarticle_driver.boards import BOARD_KINDS, ServoBoard, make_board
-from smarticle_driver.commands import check_command
+from smarticle_common.commands import check_command
 from smarticle_driver.calibration import (FsrModel, ServoCalibration, default_config_dir,
                                           load_fsr_calibration, load_servo_calibration)
 from smarticle_driver.errors import BridgeConfigError, PortUnavailable, ReplyError
-from smarticle_driver.gait import DEFAULT_SERVO_SPEED
-from smarticle_driver.params import ParamSpec
+from smarticle_common.facts import SERVO_SPEED
+from smarticle_common.params import ParamSpec
 from smarticle_driver.serial_link import SerialLink
 from smarticle_driver.slew import SlewModel
 
@@ -56,7 +56,7 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec('fsr_rate_hz', 100.0, 'FSR sampling rate, also the joint_states rate (Hz)', 100.0, 1000.0),
     ParamSpec('watchdog_timeout', 0.5, 'hold the arms where they are when no valid joint command arrives '
               'for this many seconds', 0.02, 60.0),
-    ParamSpec('default_speed', DEFAULT_SERVO_SPEED, 'speed limit (rad/s) for commands without a valid '
+    ParamSpec('default_speed', SERVO_SPEED, 'speed limit (rad/s) for commands without a valid '
               'velocity', 0.01, 100.0),
     ParamSpec('servo_calibration_file', '', f'servo calibration YAML; empty = {SERVO_CALIBRATION_FILE} in '
               "the package's config folder"),
@@ -84,7 +84,7 @@ class BridgeConfig:
     fsr_channels: tuple[int, int, int, int] = (2, 3, 4, 5)
     fsr_rate_hz: float = 100.0
     watchdog_timeout: float = 0.5
-    default_speed: float = DEFAULT_SERVO_SPEED
+    default_speed: float = SERVO_SPEED
     servo_calibration_file: str = ''
     fsr_calibration_file: str = ''
     reply_timeout: float = 0.02

@@ -21,9 +21,9 @@ from typing import Any
 
 from rclpy.node import Node
 
-from smarticle_driver import topics
+from smarticle_common import topics
 from smarticle_driver.errors import DriverError
-from smarticle_driver.params import ParameterError, declare_and_read, spin_node
+from smarticle_common.params import ParameterError, declare_and_read, spin_node
 from smarticle_driver.servo_bridge_core import NODE_NAME, PARAMS, BridgeConfig, ServoBridgeCore, StepResult
 
 #: Seconds between two log lines of the same kind of warning.

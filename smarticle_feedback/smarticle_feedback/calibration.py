@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from smarticle_driver.topics import FSR_FACES
+from smarticle_common.topics import FSR_FACES
 
 from .errors import CalibrationInputError
 

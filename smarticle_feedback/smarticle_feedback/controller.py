@@ -6,7 +6,7 @@ the held pose at the next gait period, and the controller asks for at most one h
 
 Period boundaries. Once the controller knows the gait start time ``t0`` (``start``; the node takes it
 from ``/smarticles/start``), gait period ``q`` covers gait time ``tau = (t - t0) / T + phase`` in
-``[q, q + 1)``, the same ``tau`` as ``smarticle_driver.gait``; one halt per ``q``. Before a start is known
+``[q, q + 1)``, the same ``tau`` as ``smarticle_common.gait``; one halt per ``q``. Before a start is known
 the controller falls back to a refractory time of one period ``T`` between halts. Samples before ``t0``
 never halt (the gait is not running). The debounce count restarts at every period boundary and after a
 halt, so a force that persists through the hold needs ``debounce`` fresh samples in the next period.
@@ -25,7 +25,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
-from smarticle_driver.topics import FSR_FACES
+from smarticle_common.facts import GAIT_PERIOD
+from smarticle_common.topics import FSR_FACES
 
 from .errors import FeedbackConfigError, FsrSampleError
 
@@ -61,7 +62,7 @@ class FeedbackConfig:
 
     windows: tuple[ImpactWindow, ...]
     debounce: int = 1               # consecutive in-window samples of one face that make an impact
-    period: float = 1.6             # gait period T (s): one halt per period
+    period: float = GAIT_PERIOD     # gait period T (s): one halt per period
     phase: float = 0.0              # the robot's gait phase (fraction of a period), as in GaitConfig
 
     def __post_init__(self) -> None:
@@ -76,7 +77,7 @@ class FeedbackConfig:
 
     @classmethod
     def uniform(cls, f_min: float, f_max: float, faces: Sequence[str] = FSR_FACES, debounce: int = 1,
-                period: float = 1.6, phase: float = 0.0) -> FeedbackConfig:
+                period: float = GAIT_PERIOD, phase: float = 0.0) -> FeedbackConfig:
         """The same window on every face, enabled only on ``faces``."""
         unknown = set(faces) - set(FSR_FACES)
         if unknown:

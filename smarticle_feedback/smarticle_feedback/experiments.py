@@ -24,7 +24,8 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
-from smarticle_driver.gait import GaitConfig
+from smarticle_common.facts import GAIT_PERIOD, R_BIND_BL
+from smarticle_common.gait import GaitConfig
 
 from .controller import FeedbackConfig, ImpactController
 
@@ -33,9 +34,6 @@ from .controller import FeedbackConfig, ImpactController
 C2_START = (1.3, 0.0, 350.0, (0.0, 0.25))
 #: Seeded jitter of the start (r in BL, theta and phi in deg).
 C2_JITTER = (0.04, 4.0, 4.0)
-#: A pair counts as bound in a period in which r drops below this many body lengths (as in the sim's
-#: calibration; the C2 glider of the feedback robot sits at r ~ 1.5 BL).
-R_BIND_BL = 1.6
 #: Draws of the jittered start before giving up when they overlap (robots' arms at the start phases).
 START_ATTEMPTS = 20
 
@@ -108,7 +106,7 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
     from smarticle_sim.runner import Controller, FeedbackController, GaitController
     from smarticle_sim.scenes import pair_scene
     from smarticle_sim.settings import SimConfig
-    from smarticle_tracking.pairs import pair_coordinates
+    from smarticle_common.pairs import pair_coordinates
 
     wall0 = time.perf_counter()
     config = SimConfig.from_preset(preset)
@@ -125,7 +123,7 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
                          f'in {START_ATTEMPTS} draws')
     feedback_controllers: list[FeedbackController] = []
 
-    def add_feedback(_: Physics, gaits: GaitController) -> list[Controller]:
+    def add_feedback(_: Physics, gaits: GaitController) -> Sequence[Controller]:
         if not condition.feedback:
             return []
         fb = feedback or default_feedback_config()
@@ -203,7 +201,7 @@ def format_summary(rows: Sequence[dict[str, object]], periods: float) -> str:
     return '\n'.join(out)
 
 
-def plot_traces(trials: Sequence[PairTrial], path: Path, seed: int = 0, period: float = 1.6) -> Path:
+def plot_traces(trials: Sequence[PairTrial], path: Path, seed: int = 0, period: float = GAIT_PERIOD) -> Path:
     """r(t) of one seed for every condition (Fig. 5(c)); a vertical line marks the breakdown."""
     import matplotlib
 

@@ -14,8 +14,8 @@ import rclpy
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from rclpy.node import Node
 from rclpy.time import Time
-from smarticle_driver import topics
-from smarticle_driver.params import ParameterError, declare_and_read, spin_node
+from smarticle_common import topics
+from smarticle_common.params import ParameterError, declare_and_read, spin_node
 
 from .controller import ImpactController, check_sample
 from .errors import FsrSampleError

@@ -10,9 +10,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from smarticle_driver import topics
-from smarticle_driver.gait import DEFAULT_PERIOD
-from smarticle_driver.params import ParameterError, ParamSpec
+from smarticle_common import topics
+from smarticle_common.facts import GAIT_PERIOD
+from smarticle_common.params import ParameterError, ParamSpec
 
 from .controller import FeedbackConfig, ImpactWindow
 from .errors import FeedbackConfigError
@@ -40,7 +40,7 @@ PARAMS: tuple[ParamSpec, ...] = (
     *_face_params(),
     ParamSpec('debounce_samples', 1, 'consecutive FSR samples of one face inside its window that make an '
               'impact', 1, 1000),
-    ParamSpec('period', DEFAULT_PERIOD, "gait period T (s): use the gait node's period; at most one halt "
+    ParamSpec('period', GAIT_PERIOD, "gait period T (s): use the gait node's period; at most one halt "
               'per period', 0.05, 60.0),
     ParamSpec('phase', 0.0, "gait phase of this robot (fraction of a period): use the gait node's phase",
               0.0, 0.999999),

@@ -34,19 +34,18 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from smarticle_driver.gait import GaitConfig
+from smarticle_common.gait import GaitConfig
 from smarticle_tracking.gliders import GliderClass, GliderConfig, analyse_gliders
 
 from smarticle_sim.batch import Recording, run_trial
 from smarticle_sim.errors import SceneError
-from smarticle_sim.geometry import pair_coordinates
 from smarticle_sim.scenes import RobotPlacement, Scene, dense_scene, pair_scene
-from smarticle_sim.settings import PhysicsConfig, RobotSpec, SimConfig
+from smarticle_common.facts import RobotSpec
+from smarticle_sim.settings import PhysicsConfig, SimConfig
+from smarticle_common.facts import R_BIND_BL
+from smarticle_common.pairs import one_pair
 
 OUT = Path('out/calibration')
-#: Bind distance for the sim's glider analysis: 1.6 BL plus measured contacts (the tracking default of
-#: 2 BL counts robots that sit just out of reach, never touching, as bound).
-R_BIND_BL = 1.6
 
 # ------------------------------------------------------------------ configuration
 
@@ -123,13 +122,13 @@ def pair_metrics(config: SimConfig, rec: Recording, period: float, min_periods: 
         tail += 1
     com = rec.poses[::per, :, :2].mean(axis=1)
     half = len(com) // 2
-    end = pair_coordinates(rec.poses[-1, 0], rec.poses[-1, 1], bl)
+    end_r, end_theta, end_phi = one_pair(rec.poses[-1, 0], rec.poses[-1, 1])
     analysis = analyse_gliders(rec.time, rec.poses, glider_config(config, period, min_periods),
                                contacts=pair_contacts(rec))
     best = max(analysis.gliders, key=lambda g: g.lifetime_periods, default=None)
     return {
         'periods_run': n_periods, 'touch': int(touched.sum()), 'tail': tail,
-        'r_end': end.r, 'theta_end': math.degrees(end.theta), 'phi_end': math.degrees(end.phi),
+        'r_end': end_r / bl, 'theta_end': math.degrees(end_theta), 'phi_end': math.degrees(end_phi),
         'travel_W': float(np.linalg.norm(com[-1] - com[0]) / bl),
         'late_W': float(np.linalg.norm(com[-1] - com[half]) / bl),
         'life': best.lifetime_periods if best else 0,
@@ -172,11 +171,9 @@ def pair_job(args: tuple[dict, float, float, float, tuple[float, float], float, 
     t0 = time.perf_counter()
     rec = run_trial(config, scene, periods, sample_every=2, record_fsr=False, record_contacts=True)
     row.update(admissible=True, wall_s=time.perf_counter() - t0, **pair_metrics(config, rec, gait.period))
-    bl = config.robot.body_length
     for frac in (0.25, 0.5, 0.75):   # phi along the run: does the pair settle or keep turning?
-        pc = pair_coordinates(rec.poses[int(frac * (len(rec.time) - 1)), 0],
-                              rec.poses[int(frac * (len(rec.time) - 1)), 1], bl)
-        row[f'phi_{round(100 * frac)}'] = math.degrees(pc.phi)
+        frame = rec.poses[int(frac * (len(rec.time) - 1))]
+        row[f'phi_{round(100 * frac)}'] = math.degrees(one_pair(frame[0], frame[1])[2])
     return row
 
 

@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any, Callable, Sequence
 
 import numpy as np
-from smarticle_driver.topics import FSR_FACES
+from smarticle_common.topics import FSR_FACES
 
 from .errors import SimError, SimTrouble
 from .scenes import Scene

@@ -18,15 +18,16 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from smarticle_driver import topics
-from smarticle_driver.commands import CheckedCommand, check_command
-from smarticle_driver.gait import ALPHA_MAX_RANGE_DEG, GaitConfig
-from smarticle_driver.params import ParamSpec
+from smarticle_common import topics
+from smarticle_common.commands import CheckedCommand, check_command
+from smarticle_common.facts import GAIT_PERIOD, PRESETS, TAG_DICTIONARY, TAG_SIZE
+from smarticle_common.gait import ALPHA_MAX_RANGE_DEG, GaitConfig
+from smarticle_common.params import ParamSpec
 
 from .camera import BACKENDS, CameraConfig, OverheadCamera
 from .errors import ConfigError
 from .scenes import SCENE_KINDS, Scene, build_scene
-from .settings import PRESETS, PhysicsConfig, SimConfig
+from .settings import PhysicsConfig, SimConfig
 from .physics import Physics
 from .runner import Runner
 
@@ -41,7 +42,7 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec('seed', 1, 'seed of the scene builder'),
     ParamSpec('alpha_max_deg', 90.0, "amplitude of the robots' start shape in degrees: use the gait "
               "nodes' alpha_max_deg", ALPHA_MAX_RANGE_DEG[0], ALPHA_MAX_RANGE_DEG[1]),
-    ParamSpec('period', 1.6, "gait period of the start shape (s): use the gait nodes' period", 0.05, 60.0),
+    ParamSpec('period', GAIT_PERIOD, "gait period of the start shape (s): use the gait nodes' period", 0.05, 60.0),
     ParamSpec('phase_jitter', 0.0, "dense scene: each robot's gait phase is offset by a seeded draw in "
               "+-this many periods (a stand-in for the robots' phase drift); give every gait node its "
               "robot's phase (BridgeSettings.scene() tells them; the demo does)", 0.0, 0.5),
@@ -78,8 +79,8 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec('camera_height', 1080, 'overhead camera image height (px)', 16, 8192),
     ParamSpec('camera_view', 0.6, 'metres of the plate seen across the shorter image side', 0.01, 10.0),
     ParamSpec('camera_elevation', 1.5, 'camera height above the plate (m)', 0.1, 100.0),
-    ParamSpec('camera_tag_size', 0.018, "side of each robot's ArUco tag (m); the tracker's tag_size", 0.001, 0.1),
-    ParamSpec('camera_dictionary', 'DICT_4X4_50', "ArUco dictionary of the tags (robot k carries tag k)"),
+    ParamSpec('camera_tag_size', TAG_SIZE, "side of each robot's ArUco tag (m); the tracker's tag_size", 0.001, 0.1),
+    ParamSpec('camera_dictionary', TAG_DICTIONARY, "ArUco dictionary of the tags (robot k carries tag k)"),
     ParamSpec('camera_noise', 0.0, 'Gaussian pixel noise, standard deviation in grey levels', 0.0, 255.0),
     ParamSpec('camera_blur', 0.0, 'Gaussian blur sigma (px)', 0.0, 50.0),
     ParamSpec('camera_lighting', 0.0, 'uneven lighting: brightness loss from the centre to a corner '

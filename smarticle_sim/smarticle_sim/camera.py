@@ -26,8 +26,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from smarticle_common.facts import SMALL, TAG_DICTIONARY, TAG_SIZE, RobotSpec
+
 from .errors import ConfigError
-from .settings import SMALL, RobotSpec
 
 BACKENDS = ('opencv', 'pybullet')
 _SHIFT = 4                       # fixed-point bits of fillPoly's sub-pixel coordinates
@@ -54,8 +55,8 @@ class CameraConfig:
     elevation: float = 1.5          # m, camera centre above the plate
     tilt: float = 0.0               # rad, rotation about the camera x axis
     yaw: float = 0.0                # rad, rotation about the vertical
-    tag_size: float = 0.018         # m, outer black square of the tag
-    dictionary: str = 'DICT_4X4_50'
+    tag_size: float = TAG_SIZE      # m, outer black square of the tag
+    dictionary: str = TAG_DICTIONARY
     tag_ids: tuple[int, ...] | None = None   # tag id of robot k (None: k)
     noise: float = 0.0              # standard deviation of Gaussian pixel noise (grey levels)
     blur: float = 0.0               # sigma of a Gaussian blur (px)

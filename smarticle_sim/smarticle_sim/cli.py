@@ -13,13 +13,15 @@ import sys
 import time
 from pathlib import Path
 
-from smarticle_driver.gait import GaitConfig, GaitError
+from smarticle_common.gait import GaitConfig, GaitError
 
 from .batch import plot_trajectories, run_trial, save_npz
 from .benchmark import benchmark, format_table
 from .errors import SimError
 from .scenes import Scene, build_scene
-from .settings import PRESETS, SimConfig
+from smarticle_common.facts import GAIT_PERIOD, PRESETS
+
+from .settings import SimConfig
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -34,7 +36,7 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument('--robots', type=int, default=7, help='number of robots (dense, random)')
         p.add_argument('--periods', type=float, default=300.0, help='gait periods to simulate')
         p.add_argument('--alpha-max', type=float, default=90.0, help='gait amplitude (degrees)')
-        p.add_argument('--period', type=float, default=1.6, help='gait period (s)')
+        p.add_argument('--period', type=float, default=GAIT_PERIOD, help='gait period (s)')
         p.add_argument('--seed', type=int, default=1, help='seed of the scene builder')
         p.add_argument('--preset', choices=sorted(PRESETS), default='small', help='robot preset')
         p.add_argument('--time-step', type=float, default=None, help='physics time step (s)')

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from smarticle_common.facts import GAIT_PERIOD
 
 START_AT = 0.5  # sim time (s) of the synchronised gait start
 RECORDED = ('poses', 'clock', 'start', 'gliders', 'markers')  # contract keys of the topics the demo records
@@ -60,16 +61,16 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
     from diagnostic_msgs.msg import DiagnosticArray
     from geometry_msgs.msg import PoseArray
     from rclpy.qos import QoSProfile, ReliabilityPolicy
-    from smarticle_driver import topics
+    from smarticle_common import topics
     from smarticle_bags.recording import start_recording
-    from smarticle_driver.launching import DomainReservation, ProcessGroup, isolated_ros_env
+    from smarticle_common.launching import DomainReservation, ProcessGroup, isolated_ros_env
 
     from .bridge import BridgeSettings
 
     reservation = None if 'ROS_DOMAIN_ID' in os.environ else DomainReservation()
     env = isolated_ros_env(reservation.domain_id if reservation else None)
     os.environ.update({k: env[k] for k in ('ROS_DOMAIN_ID', 'ROS_AUTOMATIC_DISCOVERY_RANGE')})
-    period = 1.6
+    period = GAIT_PERIOD
     duration = START_AT + args.periods * period
     samples: dict[int, np.ndarray] = {}
 
@@ -181,7 +182,7 @@ def main(argv: list[str] | None = None) -> int:
     analysis = analyse_gliders(times, poses, config)
     rows = glider_table(analysis.gliders, config)
     print(f'\n[demo] {args.robots} robots, {args.scene} start, alpha_max {args.alpha_max:g} deg, '
-          f'{times[-1] / 1.6:.0f} periods received over DDS, {rtf:.1f}x real time')
+          f'{times[-1] / GAIT_PERIOD:.0f} periods received over DDS, {rtf:.1f}x real time')
     print(f'[demo] gliders (pairs bound >= {args.min_periods} periods; bound = centre distance under '
           f'{config.r_bind / config.body_length:.1f} BL in every period, judged from poses alone, as a tracker '
           'would: neighbours that rest close together count too, see dist [W]):')

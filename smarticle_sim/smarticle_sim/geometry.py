@@ -1,8 +1,10 @@
-"""Planar geometry of smarticles: footprints as oriented rectangles, overlap tests, pair coordinates.
+"""Planar geometry of smarticles: footprints as oriented rectangles and overlap tests.
+
+Pair coordinates (r, theta, phi) and their inverse ``place_pair`` are ``smarticle_common.pairs``.
 
 Conventions (``docs/sim_core.md``): a robot's pose is (x, y, heading) in the arena frame, where
 heading is the angle of its body normal (body +y) from the arena x axis; the body x axis (joint 1 to
-joint 2) then points at ``heading - pi/2``. Arm angles follow ``smarticle_driver.gait``.
+joint 2) then points at ``heading - pi/2``. Arm angles follow ``smarticle_common.gait``.
 """
 
 from __future__ import annotations
@@ -11,10 +13,7 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-
-from .settings import RobotSpec
-
-TWO_PI = 2.0 * math.pi
+from smarticle_common.facts import RobotSpec
 
 
 class Rect(NamedTuple):
@@ -25,19 +24,6 @@ class Rect(NamedTuple):
     hx: float
     hy: float
     angle: float
-
-
-class PairCoordinates(NamedTuple):
-    """Relative coordinates of robot 2 seen from robot 1 (r in BL, angles in radians in [0, 2 pi))."""
-
-    r: float
-    theta: float
-    phi: float
-
-
-def wrap_angle(angle: float) -> float:
-    """Wrap an angle to [-pi, pi)."""
-    return (angle + math.pi) % TWO_PI - math.pi
 
 
 def robot_rects(spec: RobotSpec, x: float, y: float, heading: float,
@@ -82,27 +68,3 @@ def rects_overlap(a: Rect, b: Rect, gap: float = 0.0) -> bool:
 def robots_overlap(first: tuple[Rect, ...], second: tuple[Rect, ...], gap: float = 0.0) -> bool:
     """True if any rectangle of one robot overlaps any rectangle of the other."""
     return any(rects_overlap(a, b, gap) for a in first for b in second)
-
-
-def pair_coordinates(pose1: tuple[float, float, float], pose2: tuple[float, float, float],
-                     body_length: float) -> PairCoordinates:
-    """(r, theta, phi) of robot 2 relative to robot 1 from poses (x, y, heading); r in body lengths.
-
-    r = centre distance / BL; theta = polar angle of robot 2's centre in robot 1's body frame, measured
-    counter-clockwise from robot 1's body x axis (toward joint 2), so theta = pi/2 is straight ahead
-    along robot 1's normal; phi = heading2 - heading1; both in [0, 2 pi) (as smarticle_tracking.gliders).
-    """
-    dx, dy = pose2[0] - pose1[0], pose2[1] - pose1[1]
-    r = math.hypot(dx, dy) / body_length
-    theta = (math.atan2(dy, dx) - (pose1[2] - math.pi / 2.0)) % TWO_PI
-    phi = (pose2[2] - pose1[2]) % TWO_PI
-    return PairCoordinates(r, theta, phi)
-
-
-def place_pair(pose1: tuple[float, float, float], coords: PairCoordinates,
-               body_length: float) -> tuple[float, float, float]:
-    """Pose (x, y, heading) of robot 2 with pair coordinates ``coords`` relative to ``pose1``."""
-    angle = pose1[2] - math.pi / 2.0 + coords.theta
-    dist = coords.r * body_length
-    return (pose1[0] + dist * math.cos(angle), pose1[1] + dist * math.sin(angle),
-            wrap_angle(pose1[2] + coords.phi))

@@ -26,7 +26,7 @@ from typing import Sequence
 import numpy as np
 import pybullet
 from pybullet_utils.bullet_client import BulletClient
-from smarticle_driver.topics import FSR_FACES
+from smarticle_common.topics import FSR_FACES
 
 from .settings import SimConfig
 from .errors import SceneError, SimError

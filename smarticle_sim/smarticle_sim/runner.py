@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
-from smarticle_driver.gait import GaitConfig, SquareGait
+from smarticle_common.gait import GaitConfig, SquareGait
 
 from .physics import Physics
 from .scenes import Scene
@@ -206,7 +206,7 @@ class Decision(Protocol):
 class FeedbackPolicy(Protocol):
     """A per-robot tactile policy (e.g. ``smarticle_feedback.controller.ImpactController``)."""
 
-    def update(self, time: float, forces: np.ndarray) -> Decision:
+    def update(self, time: float, forces: Sequence[float], /) -> Decision:
         """Take one FSR sample (forces in N, faces in ``FSR_FACES`` order) at sim ``time``."""
 
 

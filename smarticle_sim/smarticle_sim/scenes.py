@@ -6,11 +6,12 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from smarticle_driver.gait import GaitConfig, open_loop_angles
+from smarticle_common.facts import RobotSpec
+from smarticle_common.gait import GaitConfig, open_loop_angles
+from smarticle_common.pairs import place_pair
 
-from .settings import RobotSpec
 from .errors import SceneError
-from .geometry import PairCoordinates, Rect, place_pair, rect_corners, robot_rects, robots_overlap
+from .geometry import Rect, rect_corners, robot_rects, robots_overlap
 
 #: Smallest gap (m) kept between robots by the builders.
 DEFAULT_GAP = 0.001
@@ -143,7 +144,7 @@ def pair_scene(spec: RobotSpec, gait: GaitConfig, r: float, theta: float, phi: f
     if not (math.isfinite(r) and r > 0.0):
         raise SceneError(f'pair separation r must be > 0 body lengths, got {r!r}')
     pose1 = (centre[0], centre[1], heading1)
-    pose2 = place_pair(pose1, PairCoordinates(r, theta, phi), spec.body_length)
+    pose2 = place_pair(pose1, r * spec.body_length, theta, phi)
     g1 = GaitConfig(gait.alpha_max, gait.period, gait.servo_speed, phases[0])
     g2 = GaitConfig(gait.alpha_max, gait.period, gait.servo_speed, phases[1])
     scene = Scene((_placement(*pose1, g1), _placement(*pose2, g2)), name='pair')

@@ -1,10 +1,7 @@
-"""Frozen, validated settings of the smarticle simulation: robot geometry presets and physics knobs.
+"""Frozen, validated settings of the smarticle simulation: physics knobs and the robot they simulate.
 
-Lengths in metres, masses in kilograms, angles in radians, times in seconds (SI inside).
-
-Body length: ``BL = W = w``, the width of the rigid central link along the body x axis (joint 1 to
-joint 2): 5.4 cm for the ``small`` robot, 6.5 cm for the ``feedback`` robot. It is the only length of
-a smarticle that does not change with its shape; see ``docs/sim_core.md`` for why it fits the paper.
+Lengths in metres, masses in kilograms, angles in radians, times in seconds (SI inside). The robots
+themselves (``RobotSpec``, the presets ``SMALL`` and ``FEEDBACK``) are facts of ``smarticle_common.facts``.
 """
 
 from __future__ import annotations
@@ -13,93 +10,10 @@ import math
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
-from smarticle_driver.gait import DEFAULT_SERVO_SPEED
+from smarticle_common.errors import SpecError
+from smarticle_common.facts import SMALL, RobotSpec, require_non_negative, require_positive, robot_preset
 
 from .errors import ConfigError
-
-
-def _positive(obj: Any, *names: str) -> None:
-    """Raise ConfigError unless every named field of ``obj`` is a finite number > 0."""
-    for name in names:
-        value = getattr(obj, name)
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
-                or value <= 0.0:
-            raise ConfigError(f'{type(obj).__name__}.{name} must be a finite number > 0, got {value!r}')
-
-
-def _non_negative(obj: Any, *names: str) -> None:
-    """Raise ConfigError unless every named field of ``obj`` is a finite number >= 0."""
-    for name in names:
-        value = getattr(obj, name)
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
-                or value < 0.0:
-            raise ConfigError(f'{type(obj).__name__}.{name} must be a finite number >= 0, got {value!r}')
-
-
-@dataclass(frozen=True)
-class RobotSpec:
-    """Geometry, masses and servo of one smarticle (body box + two arm boxes)."""
-
-    name: str
-    body_width: float        # w, along body x (joint 1 to joint 2) = BL
-    body_depth: float        # D, along the body normal y
-    body_height: float       # z; the body box rests on the plate
-    arm_length: float        # l, joint to tip
-    arm_thickness: float     # along the arm's face normal
-    arm_height: float        # z
-    arm_clearance: float     # gap between the plate and the bottom of the arms
-    total_mass: float
-    arm_mass: float          # each arm
-    servo_speed: float = DEFAULT_SERVO_SPEED   # rad/s, the servo's top speed
-    servo_torque: float = 0.15                 # N m, the servo's torque limit
-
-    def __post_init__(self) -> None:
-        _positive(self, 'body_width', 'body_depth', 'body_height', 'arm_length', 'arm_thickness',
-                  'arm_height', 'total_mass', 'arm_mass', 'servo_speed', 'servo_torque')
-        _non_negative(self, 'arm_clearance')
-        if self.body_mass <= 0.0:
-            raise ConfigError(f'RobotSpec.arm_mass: two arms of {self.arm_mass} kg leave nothing of '
-                              f'total_mass {self.total_mass} kg for the body')
-        if self.arm_clearance + self.arm_height > self.body_height:
-            raise ConfigError(f'RobotSpec.arm_height: arms ({self.arm_clearance} + {self.arm_height} m) '
-                              f'must fit within body_height {self.body_height} m')
-
-    @property
-    def body_mass(self) -> float:
-        """Mass of the central link (kg)."""
-        return self.total_mass - 2.0 * self.arm_mass
-
-    @property
-    def body_length(self) -> float:
-        """BL = W = body width w (m), the length unit of pair coordinates."""
-        return self.body_width
-
-    @property
-    def reach(self) -> float:
-        """Largest distance of any robot point from the body centre (m), any shape."""
-        return math.hypot(self.body_width / 2.0 + self.arm_length, self.body_depth / 2.0)
-
-
-#: The paper's robot (34.8 g; arms 5.0 x 0.3 cm, body w = 5.4, D = 2.2 cm); heights from the authors'
-#: Chrono model (body 5.4 x 2.7 x 2.2 cm, arms 5.0 x 2.3 x 0.3 cm), arms 2 mm above the plate.
-SMALL = RobotSpec(name='small', body_width=0.054, body_depth=0.022, body_height=0.027,
-                  arm_length=0.050, arm_thickness=0.003, arm_height=0.023, arm_clearance=0.002,
-                  total_mass=0.0348, arm_mass=0.0035)
-
-#: The larger FSR robot (175 g; arms 6.0 long x 0.7 cm thick, body 6.5 x 3.5 cm); heights assumed.
-FEEDBACK = RobotSpec(name='feedback', body_width=0.065, body_depth=0.035, body_height=0.040,
-                     arm_length=0.060, arm_thickness=0.007, arm_height=0.034, arm_clearance=0.003,
-                     total_mass=0.175, arm_mass=0.020, servo_torque=0.4)
-
-PRESETS: dict[str, RobotSpec] = {SMALL.name: SMALL, FEEDBACK.name: FEEDBACK}
-
-
-def robot_preset(name: str) -> RobotSpec:
-    """Return the robot preset ``name`` (``small`` or ``feedback``) or raise ConfigError."""
-    try:
-        return PRESETS[name]
-    except KeyError:
-        raise ConfigError(f'robot preset {name!r} is unknown; choose one of {", ".join(PRESETS)}') from None
 
 
 @dataclass(frozen=True)
@@ -135,9 +49,11 @@ class PhysicsConfig:
     trouble_every: int = 6                      # check for trouble every n control ticks
 
     def __post_init__(self) -> None:
-        _positive(self, 'time_step', 'control_tick', 'plate_size', 'plate_thickness', 'max_tilt',
-                  'max_speed', 'max_penetration', 'position_gain', 'contact_breaking_threshold', 'contact_erp')
-        _non_negative(self, 'gravity', 'friction_body_plate', 'friction_robot_robot', 'restitution')
+        require_positive(self, 'time_step', 'control_tick', 'plate_size', 'plate_thickness', 'max_tilt',
+                  'max_speed', 'max_penetration', 'position_gain', 'contact_breaking_threshold', 'contact_erp',
+                         error=ConfigError)
+        require_non_negative(self, 'gravity', 'friction_body_plate', 'friction_robot_robot', 'restitution',
+                             error=ConfigError)
         if self.contact_erp > 1.0:
             raise ConfigError(f'PhysicsConfig.contact_erp must be in (0, 1], got {self.contact_erp}')
         for name in ('solver_iterations', 'trouble_every', 'penetration_checks'):
@@ -145,7 +61,7 @@ class PhysicsConfig:
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ConfigError(f'PhysicsConfig.{name} must be an integer >= 1, got {value!r}')
         if self.friction_arm_arm is not None:
-            _positive(self, 'friction_arm_arm')
+            require_positive(self, 'friction_arm_arm', error=ConfigError)
         if self.link_frictions()[2] > 10.0:
             raise ConfigError(f'PhysicsConfig.friction_arm_arm: {self.friction_arm_arm} with friction_robot_robot '
                               f'{self.friction_robot_robot} leaves too little body friction to reach '
@@ -200,7 +116,11 @@ class SimConfig:
         if unknown:
             raise ConfigError(f'unknown PhysicsConfig field(s) {", ".join(unknown)}; '
                               f'known: {", ".join(sorted(known))}')
-        return cls(robot_preset(preset), PhysicsConfig(**physics))
+        try:
+            robot = robot_preset(preset)
+        except SpecError as err:
+            raise ConfigError(str(err)) from None
+        return cls(robot, PhysicsConfig(**physics))
 
     def with_physics(self, **changes: Any) -> SimConfig:
         """Return a copy with some PhysicsConfig fields changed (validated)."""

@@ -22,8 +22,8 @@ from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.time import Time
-from smarticle_driver import topics
-from smarticle_driver.params import ParameterError, declare_and_read
+from smarticle_common import topics
+from smarticle_common.params import ParameterError, declare_and_read
 
 from .bridge import NODE_NAME, PARAMS, BridgeSettings, SimBridgeCore
 from .errors import SimError, SimTrouble

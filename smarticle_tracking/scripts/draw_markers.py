@@ -12,7 +12,7 @@ from __future__ import annotations
 import sys
 
 import numpy as np
-from smarticle_driver.gait import GaitConfig
+from smarticle_common.gait import GaitConfig
 from smarticle_sim.scenes import dense_scene
 from smarticle_sim.settings import SimConfig
 from smarticle_sim.runner import Runner

@@ -28,6 +28,7 @@ from .calibration import Calibration, board_targets, calibrate, save_calibration
 from .errors import TrackingError
 from .settings import SIM_CALIBRATION
 from .tracker import TagDetector, TrackerConfig
+from smarticle_common.facts import TAG_DICTIONARY, TAG_SIZE
 
 
 def read_targets(path: str) -> tuple[dict[int, tuple[float, float, float]], float, str]:
@@ -36,7 +37,7 @@ def read_targets(path: str) -> tuple[dict[int, tuple[float, float, float]], floa
     if not isinstance(data, dict) or not isinstance(data.get('tags'), dict) or 'tag_size' not in data:
         raise ValueError(f'{path}: need keys tag_size (m) and tags: {{id: [x, y, heading_deg]}}')
     tags = {int(k): (float(v[0]), float(v[1]), math.radians(float(v[2]))) for k, v in data['tags'].items()}
-    return tags, float(data['tag_size']), str(data.get('dictionary', 'DICT_4X4_50'))
+    return tags, float(data['tag_size']), str(data.get('dictionary', TAG_DICTIONARY))
 
 
 def sim_calibration(width: int = 1920, height: int = 1080, **camera: Any) -> Calibration:
@@ -62,7 +63,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--board', help='ROWSxCOLS board centred on the origin instead of --targets')
     parser.add_argument('--spacing', type=float, default=0.12, help='board tag spacing (m)')
     parser.add_argument('--first-id', type=int, default=10, help='id of the board\'s first tag')
-    parser.add_argument('--tag-size', type=float, default=0.018, help='board tag size (m)')
+    parser.add_argument('--tag-size', type=float, default=TAG_SIZE, help='board tag size (m)')
     parser.add_argument('--sim', action='store_true', help='calibrate the simulated camera')
     parser.add_argument('--width', type=int, default=1920)
     parser.add_argument('--height', type=int, default=1080)
@@ -84,7 +85,7 @@ def main(argv: list[str] | None = None) -> int:
             else:
                 rows, cols = (int(v) for v in args.board.lower().split('x'))
                 targets = board_targets(rows, cols, args.spacing, args.first_id)
-                tag_size, dictionary = args.tag_size, 'DICT_4X4_50'
+                tag_size, dictionary = args.tag_size, TAG_DICTIONARY
             found = TagDetector(TrackerConfig(tag_ids=tuple(sorted(targets)), dictionary=dictionary,
                                               tag_size=tag_size)).detect(frame)
             calibration = calibrate(found.corners, found.ids, targets, tag_size, frame.shape[1],

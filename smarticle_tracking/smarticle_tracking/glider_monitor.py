@@ -6,7 +6,7 @@ while its run of bound periods is open: it was bound in the last completed perio
 current one included once it has bound. When a period closes, runs that did not bind end; those of
 at least K periods go to ``finished`` (a bounded history). Memory is O(pairs + history), not O(frames).
 
-All maths comes from :mod:`smarticle_tracking.pairs` and :mod:`smarticle_tracking.gliders`
+All maths comes from :mod:`smarticle_common.pairs` and :mod:`smarticle_tracking.gliders`
 (pair_coordinates, pair_centres, period_index, frame_hits, frame_sums, stretch_means,
 classify_configuration), so the batch and online answers agree (tests/smarticle_tracking prove it).
 """
@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike
 from .errors import GliderConfigError, GliderInputError
 from .gliders import (SUM_FIELDS, GliderClass, GliderConfig, classify_configuration, frame_hits,
                       frame_sums, period_index, stretch_means)
-from .pairs import FloatArray, IntArray, as_pose_array, pair_centres, pair_coordinates, pair_indices
+from smarticle_common.pairs import FloatArray, IntArray, as_pose_array, pair_centres, pair_coordinates, pair_indices
 
 
 class BoundPair(NamedTuple):

@@ -19,8 +19,8 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Point
 from rclpy.node import Node
 from rclpy.time import Time
-from smarticle_driver import topics
-from smarticle_driver.params import ParameterError, declare_and_read, spin_node
+from smarticle_common import topics
+from smarticle_common.params import ParameterError, declare_and_read, spin_node
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 

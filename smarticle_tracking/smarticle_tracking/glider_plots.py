@@ -11,10 +11,9 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Arc, Polygon
 
 from .gliders import GliderAnalysis
-from .pairs import BODY_LENGTH
+from smarticle_common.pairs import BODY_LENGTH
+from smarticle_common.facts import SMALL
 
-#: Small-robot geometry used in the drawings (m): body width w, body depth D, arm length l.
-BODY_WIDTH, BODY_DEPTH, ARM_LENGTH = 0.054, 0.022, 0.050
 
 
 def _save(fig: Figure, path: str | Path, dpi: int) -> Path:
@@ -71,12 +70,12 @@ def _robot_outline(x: float, y: float, heading: float, alpha: tuple[float, float
     normal = np.array([math.cos(heading), math.sin(heading)])
     axis = np.array([math.sin(heading), -math.cos(heading)])     # body x = normal turned by -90 deg
     centre = np.array([x, y])
-    hw, hd = BODY_WIDTH / 2, BODY_DEPTH / 2
+    hw, hd = SMALL.body_width / 2, SMALL.body_depth / 2
     body = np.array([centre + sx * hw * axis + sy * hd * normal
                      for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))])
     joint1, joint2 = centre - hw * axis, centre + hw * axis
-    tip1 = joint1 + ARM_LENGTH * (-math.cos(alpha[0]) * axis + math.sin(alpha[0]) * normal)
-    tip2 = joint2 + ARM_LENGTH * (math.cos(alpha[1]) * axis + math.sin(alpha[1]) * normal)
+    tip1 = joint1 + SMALL.arm_length * (-math.cos(alpha[0]) * axis + math.sin(alpha[0]) * normal)
+    tip2 = joint2 + SMALL.arm_length * (math.cos(alpha[1]) * axis + math.sin(alpha[1]) * normal)
     arms = np.array([[tip1, joint1], [joint2, tip2]])
     return body, arms
 

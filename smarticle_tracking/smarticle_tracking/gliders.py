@@ -40,14 +40,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from .errors import GliderConfigError, GliderInputError, MsdFitError
 from .msd import MsdResult, default_max_lag, fit_msd_exponent, msd
-from .pairs import (BODY_LENGTH, PairCoordinates, angular_distance, as_pose_array, circular_mean,
+from smarticle_common.pairs import (BODY_LENGTH, PairCoordinates, angular_distance, as_pose_array, circular_mean,
                     pair_centres, pair_coordinates, pair_indices)
+from smarticle_common.facts import GAIT_PERIOD
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
 BoolArray = NDArray[np.bool_]
 
-DEFAULT_PERIOD = 1.6
 #: Default bind distance: 2 BL (10.8 cm) between body centres, about where an arm (5 cm, hinged at the
 #: body end 2.7 cm from the centre) of one robot can still reach the other robot.
 DEFAULT_R_BIND = 2.0 * BODY_LENGTH
@@ -68,7 +68,7 @@ class GliderClass(Enum):
 class GliderConfig:
     """Glider-analysis settings, SI units (m, s, rad); ``width`` is the W of the paper's distances."""
 
-    period: float = DEFAULT_PERIOD
+    period: float = GAIT_PERIOD
     r_bind: float = DEFAULT_R_BIND
     min_periods: int = 30
     class_tolerance: float = math.radians(45.0)

@@ -20,6 +20,7 @@ from numpy.typing import ArrayLike
 
 from .gliders import GliderClass
 from .glider_monitor import BoundPair
+from smarticle_common.facts import SMALL
 
 Point = tuple[float, float]
 Rgba = tuple[float, float, float, float]
@@ -41,10 +42,10 @@ TEXT_HEIGHT = 0.012      # m
 class RobotDims:
     """Outline geometry of a robot (m): body w x D, arms l x t (defaults: the small smarticle)."""
 
-    body_width: float = 0.054
-    body_depth: float = 0.022
-    arm_length: float = 0.05
-    arm_thickness: float = 0.003
+    body_width: float = SMALL.body_width
+    body_depth: float = SMALL.body_depth
+    arm_length: float = SMALL.arm_length
+    arm_thickness: float = SMALL.arm_thickness
 
 
 class MarkerShape(NamedTuple):

@@ -12,13 +12,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from smarticle_driver.params import ParamSpec, defaults_yaml
+from smarticle_common.params import ParamSpec, defaults_yaml
 
 from .calibration import Calibration, load_calibration
 from .gliders import GliderConfig
 from .markers import RobotDims
-from .pairs import BODY_LENGTH
+from smarticle_common.pairs import BODY_LENGTH
 from .tracker import TrackerConfig
+from smarticle_common.facts import GAIT_PERIOD, SMALL, TAG_DICTIONARY, TAG_SIZE
 
 TRACKER_NODE = 'tracker'
 MONITOR_NODE = 'glider_monitor'
@@ -29,9 +30,9 @@ SIM_CALIBRATION = CONFIG_DIR / 'sim_overhead_calibration.yaml'
 TRACKER_PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec('calibration_file', '', 'plane-homography YAML from tracker_calibrate; empty = the shipped '
               'calibration of the sim camera at its defaults (config/sim_overhead_calibration.yaml)'),
-    ParamSpec('dictionary', 'DICT_4X4_50', 'OpenCV ArUco dictionary of the tags'),
+    ParamSpec('dictionary', TAG_DICTIONARY, 'OpenCV ArUco dictionary of the tags'),
     ParamSpec('tag_ids', [0, 1, 2, 3, 4, 5, 6], 'tag id of each robot (integer list): the k-th id is robot k'),
-    ParamSpec('tag_size', 0.018, 'side of the tag (outer black square) in metres', 0.001, 1.0),
+    ParamSpec('tag_size', TAG_SIZE, 'side of the tag (outer black square) in metres', 0.001, 1.0),
     ParamSpec('size_tolerance', 0.25, 'reject a tag whose mapped side differs from tag_size by more than '
               'this fraction', 0.01, 0.99),
     ParamSpec('threshold_window', 13, 'adaptive-threshold window in pixels (odd; 0 = OpenCV sweep, slower)',
@@ -45,7 +46,7 @@ TRACKER_PARAMS: tuple[ParamSpec, ...] = (
 )
 
 MONITOR_PARAMS: tuple[ParamSpec, ...] = (
-    ParamSpec('period', 1.6, 'gait period T (s)', 0.01, 3600.0),
+    ParamSpec('period', GAIT_PERIOD, 'gait period T (s)', 0.01, 3600.0),
     ParamSpec('r_bind', 2.0 * BODY_LENGTH, 'a pair is bound in a period if its centre distance falls below '
               'this (m)', 1e-4, 10.0),
     ParamSpec('min_periods', 30, 'K: bound periods in a row that make a glider', 1, 100000),
@@ -56,7 +57,7 @@ MONITOR_PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec('history', 100, 'finished gliders kept', 1, 100000),
     ParamSpec('publish_period', 0.1, 'message-time seconds between reports (0 = every frame)', 0.0, 3600.0),
     ParamSpec('show_arms', True, 'subscribe to /smarticle_<k>/joint_states and draw the arms'),
-    ParamSpec('body_width', 0.054, 'marker geometry: body width along the joint axis (m)', 1e-4, 1.0),
+    ParamSpec('body_width', SMALL.body_width, 'marker geometry: body width along the joint axis (m)', 1e-4, 1.0),
     ParamSpec('body_depth', 0.022, 'marker geometry: body depth along the normal (m)', 1e-4, 1.0),
     ParamSpec('arm_length', 0.05, 'marker geometry: arm length (m)', 1e-4, 1.0),
     ParamSpec('arm_thickness', 0.003, 'marker geometry: arm thickness (m)', 1e-5, 1.0),

@@ -25,6 +25,7 @@ from numpy.typing import NDArray
 
 from .calibration import Calibration
 from .errors import FrameEncodingError, FrameSizeError, TrackerConfigError, TrackerInputError
+from smarticle_common.facts import TAG_DICTIONARY, TAG_SIZE
 
 FloatArray = NDArray[np.float64]
 
@@ -48,8 +49,8 @@ class TrackerConfig:
     """Tag layout and detector settings (SI units)."""
 
     tag_ids: tuple[int, ...] = tuple(range(7))   # tag id of robot k = tag_ids[k]
-    dictionary: str = 'DICT_4X4_50'
-    tag_size: float = 0.018                      # m, outer black square
+    dictionary: str = TAG_DICTIONARY
+    tag_size: float = TAG_SIZE                   # m, outer black square
     size_tolerance: float = 0.25                 # reject tags whose mapped side is off by this fraction
     threshold_window: int = 13                   # px, one adaptive-threshold window (0: OpenCV's sweep)
     refine: bool = True                          # sub-pixel corner refinement (on the full-size frame)

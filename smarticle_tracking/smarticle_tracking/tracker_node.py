@@ -19,8 +19,8 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Pose, PoseArray, PoseStamped
 from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.node import Node
-from smarticle_driver import topics
-from smarticle_driver.params import ParameterError, declare_and_read, spin_node
+from smarticle_common import topics
+from smarticle_common.params import ParameterError, declare_and_read, spin_node
 
 from .errors import CalibrationError, FrameEncodingError, FrameSizeError, TrackerError
 from .settings import TRACKER_NODE, TRACKER_PARAMS, tracker_calibration, tracker_config

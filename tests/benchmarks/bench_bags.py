@@ -67,7 +67,7 @@ def bench_record(seconds: float, bag: Path, log_dir: Path) -> list[dict[str, Any
     import rclpy
     from geometry_msgs.msg import PoseArray
     from rclpy.qos import QoSProfile, ReliabilityPolicy
-    from smarticle_driver.launching import ProcessGroup
+    from smarticle_common.launching import ProcessGroup
 
     shutil.rmtree(bag, ignore_errors=True)
     rclpy.init()
@@ -191,8 +191,8 @@ def bench_replay(bag: Path, rate: float, log_dir: Path) -> tuple[list[dict[str, 
     """Play ``bag`` into a raw subscriber; return a summary row per topic group and all lateness (ms)."""
     import rclpy
     from rclpy.qos import QoSProfile, ReliabilityPolicy
-    from smarticle_driver import topics as contract
-    from smarticle_driver.launching import ProcessGroup
+    from smarticle_common import topics as contract
+    from smarticle_common.launching import ProcessGroup
 
     reader = BagReader(bag)
     names = [t for t in sorted(reader.topics) if t != '/smarticles/start']
@@ -260,7 +260,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.quick:
         args.seconds, args.repeats = min(args.seconds, 15.0), min(args.repeats, 2)
-    from smarticle_driver.launching import DomainReservation, isolated_ros_env
+    from smarticle_common.launching import DomainReservation, isolated_ros_env
 
     reservation = DomainReservation()
     os.environ.update(isolated_ros_env(reservation.domain_id))

@@ -26,8 +26,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import machine_line, markdown_table, out_path, write_csv
-from smarticle_driver import topics
-from smarticle_driver.gait import GaitConfig, SquareGait
+from smarticle_common import topics
+from smarticle_common.gait import GaitConfig, SquareGait
 from smarticle_sim.bridge import BridgeSettings, SimBridgeCore
 from smarticle_sim.camera import CameraConfig, OverheadCamera
 from smarticle_tracking.calibrate_cli import sim_calibration

@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 import rclpy
-from smarticle_driver.launching import DomainReservation, ProcessGroup, isolated_ros_env
+from smarticle_common.launching import DomainReservation, ProcessGroup, isolated_ros_env
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))   # the repository root: tests.* helpers
 from tests.benchmarks._common import ROOT, markdown_table, out_path, write_csv

@@ -22,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 import rclpy
-from smarticle_driver import topics
-from smarticle_driver.launching import DomainReservation, ProcessGroup, isolated_ros_env
+from smarticle_common import topics
+from smarticle_common.launching import DomainReservation, ProcessGroup, isolated_ros_env
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))   # the repository root: tests.* helpers
 from smarticle_feedback.experiments import C2_START, Condition, c2_start, pair_lifetime, run_pair_trial

@@ -14,9 +14,9 @@ import csv
 import time
 from pathlib import Path
 
-from smarticle_driver import topics
-from smarticle_driver.gait import SquareGait
-from smarticle_driver.launching import ProcessGroup, isolated_ros_env
+from smarticle_common import topics
+from smarticle_common.gait import SquareGait
+from smarticle_common.launching import ProcessGroup, isolated_ros_env
 from smarticle_sim.bridge import BridgeSettings, SimBridgeCore
 from smarticle_sim.scenes import build_scene
 from smarticle_sim.runner import Runner

@@ -34,7 +34,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import Progress, add_clock_argument, clock_of, figure, machine_line, markdown_table, out_path, write_csv
-from smarticle_driver.gait import GaitConfig
+from smarticle_common.gait import GaitConfig
 from smarticle_sim.errors import SimTrouble
 from smarticle_sim.scenes import RobotPlacement, Scene, pair_scene
 from smarticle_sim.settings import SimConfig

@@ -34,7 +34,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import Progress, machine_line, markdown_table, out_path, write_csv
-from smarticle_driver.gait import GaitConfig, GaitError
+from smarticle_common.gait import GaitConfig, GaitError
 from smarticle_sim.errors import SceneError, SimTrouble
 from smarticle_sim.geometry import robot_rects, robots_overlap
 from smarticle_sim.scenes import dense_scene

@@ -29,7 +29,7 @@ from typing import Callable
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import (PhysicsTimer, Progress, add_clock_argument, clock_of, machine_line, markdown_table, out_path,
                      write_csv)
-from smarticle_driver.gait import GaitConfig
+from smarticle_common.gait import GaitConfig
 from smarticle_sim.batch import scene_period
 from smarticle_sim.benchmark import bare_loop, batch_loop
 from smarticle_sim.scenes import Scene, dense_scene

@@ -24,7 +24,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import figure, machine_line, markdown_table, out_path, write_csv
-from smarticle_driver.gait import GaitConfig
+from smarticle_common.gait import GaitConfig
 from smarticle_sim.camera import CameraConfig, OverheadCamera
 from smarticle_sim.scenes import dense_scene
 from smarticle_sim.settings import SimConfig

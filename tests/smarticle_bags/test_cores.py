@@ -18,7 +18,7 @@ from smarticle_bags.playback import PlaybackClock, PlaybackOptions, window
 from smarticle_bags.reader import BagReader
 from smarticle_bags.selection import TopicFilter, parse_remaps
 from smarticle_bags.settings import PLAYER_NODE, PLAYER_PARAMS, RECORDER_NODE, RECORDER_PARAMS
-from smarticle_driver.params import read_defaults_yaml
+from smarticle_common.params import read_defaults_yaml
 
 from .helpers import JOINTS, POSES, T0, make_bag
 

@@ -9,10 +9,10 @@ from pathlib import Path
 
 import pytest
 
-from smarticle_driver import topics
-from smarticle_driver.gait import GaitConfig, SquareGait
+from smarticle_common import topics
+from smarticle_common.gait import GaitConfig, SquareGait
 from smarticle_driver.gait_node import NODE_NAME, PARAMS
-from smarticle_driver.params import read_defaults_yaml
+from smarticle_common.params import read_defaults_yaml
 from tests.conftest import executable, spin_until
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -10,12 +10,12 @@ from pathlib import Path
 
 import pytest
 
-from smarticle_driver import topics
+from smarticle_common import topics
 from smarticle_driver.calibration import FsrModel, load_fsr_calibration, load_servo_calibration
 from smarticle_driver.emulator import MaestroEmulator
 from smarticle_driver.errors import BridgeConfigError
 from smarticle_driver.maestro import MaestroBoard
-from smarticle_driver.params import read_defaults_yaml
+from smarticle_common.params import read_defaults_yaml
 from smarticle_driver.servo_bridge_core import (NODE_NAME, PARAMS, BridgeConfig, Level, ServoBridgeCore,
                                                 StepResult, check_command)
 from tests.smarticle_driver.fake_board_helpers import open_board, running_emulator, wait_until

@@ -15,10 +15,10 @@ from typing import Any
 
 import pytest
 
-from smarticle_driver import topics
+from smarticle_common import topics
 from smarticle_driver.calibration import load_fsr_calibration, load_servo_calibration
 from smarticle_driver.emulator import MaestroEmulator, TargetRecord
-from smarticle_driver.gait import CORNER_SIGNS
+from smarticle_common.gait import CORNER_SIGNS
 from tests.conftest import spin_until
 from tests.smarticle_driver.fake_board_helpers import open_board, running_emulator, wait_until
 

@@ -13,10 +13,11 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
-from smarticle_driver import maestro, topics
+from smarticle_common import topics
+from smarticle_driver import maestro
 from smarticle_driver.calibration import default_config_dir, load_fsr_calibration
 from smarticle_driver.emulator import MaestroEmulator, TargetRecord
-from smarticle_driver.launching import ProcessGroup
+from smarticle_common.launching import ProcessGroup
 from smarticle_driver.servo_bridge_core import FSR_CALIBRATION_FILE
 
 #: Emulator channel of each FSR face (the servo bridge's defaults).

@@ -5,8 +5,8 @@ from __future__ import annotations
 import math
 
 import pytest
-from smarticle_driver.params import ParameterError, read_defaults_yaml
-from smarticle_driver.topics import FSR_FACES
+from smarticle_common.params import ParameterError, read_defaults_yaml
+from smarticle_common.topics import FSR_FACES
 
 from smarticle_feedback.controller import FeedbackConfig, ImpactController, ImpactWindow, check_sample
 from smarticle_feedback.errors import FeedbackConfigError, FsrSampleError

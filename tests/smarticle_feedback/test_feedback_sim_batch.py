@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from smarticle_driver.topics import FSR_FACES
+from smarticle_common.topics import FSR_FACES
 from smarticle_sim.batch import Recording, save_npz
 
 from smarticle_feedback import calibration

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import pytest
-from smarticle_driver.gait import GaitConfig
+from smarticle_common.gait import GaitConfig
 
 from smarticle_sim.settings import SimConfig
 

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from smarticle_driver.gait import GaitConfig
-from smarticle_driver.topics import FSR_FACES
+from smarticle_common.gait import GaitConfig
+from smarticle_common.topics import FSR_FACES
 
 from smarticle_sim.batch import load_npz, run_trial, save_npz
 from smarticle_sim.cli import main

@@ -6,13 +6,13 @@ import math
 
 import numpy as np
 import pytest
-from smarticle_driver.gait import GaitConfig
+from smarticle_common.gait import GaitConfig
 
 from smarticle_sim.errors import SceneError
-from smarticle_sim.geometry import (PairCoordinates, Rect, pair_coordinates, place_pair, rect_corners,
-                                    rects_overlap, robot_rects)
+from smarticle_common.facts import SMALL
+from smarticle_common.pairs import one_pair
+from smarticle_sim.geometry import Rect, rect_corners, rects_overlap, robot_rects
 from smarticle_sim.scenes import RobotPlacement, Scene, dense_scene, pair_scene, random_scene
-from smarticle_sim.settings import SMALL
 
 
 def test_rect_overlap_separating_axis() -> None:
@@ -34,18 +34,6 @@ def test_arm_tips_follow_the_gait_convention() -> None:
     _, arm1, arm2 = robot_rects(SMALL, 0.0, 0.0, math.pi / 2, 0.0, 0.0)
     assert arm1.cx == pytest.approx(-(SMALL.body_width + SMALL.arm_length) / 2)
     assert rect_corners(arm2)[:, 0].max() == pytest.approx(SMALL.body_width / 2 + SMALL.arm_length)
-
-
-def test_pair_coordinates_round_trip() -> None:
-    pose1 = (0.1, -0.05, 0.7)
-    coords = PairCoordinates(1.3, math.radians(60), math.radians(200))
-    pose2 = place_pair(pose1, coords, 0.054)
-    back = pair_coordinates(pose1, pose2, 0.054)
-    assert np.allclose(back, coords)
-    # theta = 0 is along robot 1's body x axis (its arm-2 side), 90 deg straight ahead along its normal
-    side = place_pair((0.0, 0.0, math.pi / 2), PairCoordinates(1.0, 0.0, 0.0), 1.0)
-    ahead = place_pair((0.0, 0.0, math.pi / 2), PairCoordinates(1.0, math.pi / 2, 0.0), 1.0)
-    assert np.allclose(side[:2], (1.0, 0.0)) and np.allclose(ahead[:2], (0.0, 1.0))
 
 
 def test_dense_scene_is_seeded_packed_and_in_phase(gait90: GaitConfig) -> None:
@@ -74,8 +62,8 @@ def test_dense_scene_phase_jitter_is_seeded_and_bounded(gait90: GaitConfig) -> N
 def test_pair_scene_places_robot_two(gait90: GaitConfig) -> None:
     scene = pair_scene(SMALL, gait90, 1.6, math.radians(270), math.radians(180), phases=(0.0, 0.25))
     r1, r2 = scene.robots
-    coords = pair_coordinates((r1.x, r1.y, r1.heading), (r2.x, r2.y, r2.heading), SMALL.body_length)
-    assert np.allclose(coords, (1.6, math.radians(270), math.pi))
+    r, theta, phi = one_pair((r1.x, r1.y, r1.heading), (r2.x, r2.y, r2.heading))
+    assert np.allclose((r / SMALL.body_length, theta, phi), (1.6, math.radians(270), math.pi))
     assert (r1.gait.phase, r2.gait.phase) == (0.0, 0.25)   # type: ignore[union-attr]
     assert (r2.alpha1, r2.alpha2) == pytest.approx((-math.pi / 2, math.pi / 2))   # phase 0.25 starts at c1
 

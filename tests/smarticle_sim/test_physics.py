@@ -8,12 +8,13 @@ from dataclasses import replace
 import numpy as np
 import pybullet
 import pytest
-from smarticle_driver.gait import GaitConfig
-from smarticle_driver.topics import FSR_FACES
+from smarticle_common.gait import GaitConfig
+from smarticle_common.topics import FSR_FACES
 
 from smarticle_sim.errors import SceneError, SimError, SimTrouble
 from smarticle_sim.scenes import RobotPlacement, Scene, dense_scene
-from smarticle_sim.settings import SMALL, SimConfig
+from smarticle_common.facts import SMALL
+from smarticle_sim.settings import SimConfig
 from smarticle_sim.trouble import check_state
 from smarticle_sim.physics import ARM_JOINTS, Physics
 from smarticle_sim.runner import Runner

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from smarticle_driver.gait import GaitConfig
+from smarticle_common.gait import GaitConfig
 
 from smarticle_sim.batch import run_trial
 from smarticle_sim.physics import Physics

@@ -7,42 +7,8 @@ import math
 import pytest
 
 from smarticle_sim.errors import ConfigError
-from smarticle_sim.settings import (FEEDBACK, SMALL, PhysicsConfig, RobotSpec, SimConfig, robot_preset,
+from smarticle_sim.settings import (PhysicsConfig, SimConfig,
                                     steps_per_tick)
-
-
-def test_small_preset_is_the_papers_robot() -> None:
-    assert SMALL.total_mass == pytest.approx(0.0348)
-    assert SMALL.body_mass + 2 * SMALL.arm_mass == pytest.approx(0.0348)
-    assert (SMALL.arm_length, SMALL.arm_thickness) == (0.050, 0.003)
-    assert (SMALL.body_width, SMALL.body_depth) == (0.054, 0.022)
-    assert SMALL.body_length == SMALL.body_width == 0.054
-    assert SMALL.arm_clearance > 0 and SMALL.arm_clearance + SMALL.arm_height <= SMALL.body_height
-
-
-def test_feedback_preset() -> None:
-    assert robot_preset('feedback') is FEEDBACK
-    assert FEEDBACK.total_mass == pytest.approx(0.175)
-    assert (FEEDBACK.arm_length, FEEDBACK.arm_thickness) == (0.060, 0.007)
-    assert (FEEDBACK.body_width, FEEDBACK.body_depth) == (0.065, 0.035)
-
-
-def test_unknown_preset_refused() -> None:
-    with pytest.raises(ConfigError, match="'huge'.*small"):
-        robot_preset('huge')
-
-
-@pytest.mark.parametrize('field, value', [('total_mass', -0.01), ('arm_mass', 0.0), ('arm_length', math.nan),
-                                          ('servo_torque', -1.0)])
-def test_bad_robot_values_refused(field: str, value: float) -> None:
-    values = {**SMALL.__dict__, field: value}
-    with pytest.raises(ConfigError, match=f'RobotSpec.{field}'):
-        RobotSpec(**values)
-
-
-def test_arms_heavier_than_robot_refused() -> None:
-    with pytest.raises(ConfigError, match='arm_mass'):
-        RobotSpec(**{**SMALL.__dict__, 'arm_mass': 0.02})
 
 
 @pytest.mark.parametrize('field, value', [('time_step', 0.0), ('time_step', -1e-3), ('solver_iterations', 0),

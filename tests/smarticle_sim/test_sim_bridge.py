@@ -7,9 +7,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from smarticle_driver import topics
-from smarticle_driver.gait import GaitConfig, SquareGait, open_loop_angles
-from smarticle_driver.params import read_defaults_yaml
+from smarticle_common import topics
+from smarticle_common.gait import GaitConfig, SquareGait, open_loop_angles
+from smarticle_common.params import read_defaults_yaml
 from smarticle_sim.bridge import NODE_NAME, PARAMS, BridgeSettings, SimBridgeCore
 from smarticle_sim.errors import ConfigError
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from smarticle_driver.params import read_defaults_yaml
+from smarticle_common.params import read_defaults_yaml
 from smarticle_tracking.glider_monitor import GliderMonitor
 from smarticle_tracking.gliders import GliderClass, GliderConfig
 from smarticle_tracking.markers import CLASS_COLOURS, ROBOT_COLOUR, RobotDims, render_png, robot_outline, scene_markers

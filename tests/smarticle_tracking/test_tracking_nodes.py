@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from smarticle_driver import topics
+from smarticle_common import topics
 from smarticle_sim.camera import CameraConfig, OverheadCamera
 from smarticle_tracking.calibrate_cli import sim_calibration
 from smarticle_tracking.calibration import save_calibration

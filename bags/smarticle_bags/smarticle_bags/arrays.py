@@ -13,7 +13,7 @@ from typing import Any, Iterable
 import numpy as np
 import numpy.typing as npt
 
-from smarticle_driver import topics as contract
+from smarticle_common import topics as contract
 
 from .reader import BagReader
 

@@ -10,6 +10,7 @@ from typing import Any
 
 from .errors import BagError
 from .settings import PLAYER_PARAMS, RECORDER_PARAMS, default
+from smarticle_common.facts import GAIT_PERIOD
 
 PROG = 'smarticle-bag'
 
@@ -106,7 +107,7 @@ def build_parser() -> argparse.ArgumentParser:
                        description='Feed the bag\'s poses to smarticle_tracking.gliders.')
     p.add_argument('bag', help='bag folder or .mcap file')
     p.add_argument('--topic', default='/smarticles/poses', help='PoseArray topic with the robot poses')
-    p.add_argument('--period', type=float, default=1.6, help='gait period (s) (default 1.6)')
+    p.add_argument('--period', type=float, default=GAIT_PERIOD, help=f'gait period (s) (default {GAIT_PERIOD:g})')
     p.add_argument('--min-periods', type=int, default=30,
                    help='bound this many periods makes a glider (default 30, as in the paper)')
     p.add_argument('--plot', default=None, help='PNG of the gliders (default: <bag>_gliders.png)')

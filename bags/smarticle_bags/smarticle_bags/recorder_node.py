@@ -16,8 +16,8 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
-from smarticle_driver import topics as contract
-from smarticle_driver.params import ParameterError, declare_and_read
+from smarticle_common import topics as contract
+from smarticle_common.params import ParameterError, declare_and_read
 
 from . import qos
 from .errors import BagError

@@ -86,7 +86,7 @@ class Recording:
 def start_recording(group: Any, output: Path | str, topics: Iterable[str] = (), *, regex: str = '',
                     compression: str = '', flush_interval: float = 1.0, polling_interval: float = 0.1,
                     ros_args: Iterable[str] = ()) -> Recording:
-    """Start ``smarticle-bag record`` in ``group`` (a smarticle_driver.launching.ProcessGroup).
+    """Start ``smarticle-bag record`` in ``group`` (a smarticle_common.launching.ProcessGroup).
 
     ``topics`` are recorded as soon as a publisher offers them (looked for every ``polling_interval``
     s); ``regex`` adds topics by regular expression; ``compression`` is '' (the default, zstd), 'zstd',

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from smarticle_driver.params import ParamSpec
+from smarticle_common.params import ParamSpec
 
 from .errors import OptionError
 from .playback import PlaybackOptions

@@ -1,9 +1,12 @@
-"""Pair coordinates of two smarticles (paper Fig. 3(a)), vectorised over frames and pairs.
+"""Pair coordinates of two smarticles (paper Fig. 3(a)), vectorised over frames and pairs: the one implementation.
+
+Units, everywhere in the stack: ``r`` in metres (``to_body_lengths`` converts), angles in radians,
+``theta`` and ``phi`` in [0, 2 pi) (``wrap_2pi``), headings in [-pi, pi) (``wrap_pi``).
 
 Conventions (drawn in docs/gliders.md):
 
 * A pose is ``(x, y, heading)`` in the arena frame: the body centre (m) and the angle (rad) of the
-  body normal, which is the robot's heading (the body frame of ``smarticle_driver.gait``: body x from
+  body normal, which is the robot's heading (the body frame of ``smarticle_common.gait``: body x from
   joint 1 to joint 2, body y = the normal, so body x points at ``heading - pi/2``).
 * For the ordered pair ``(i, j)`` with ``i < j``:
 
@@ -26,10 +29,9 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .errors import GliderInputError
+from .errors import PairInputError
+from .facts import BODY_LENGTH
 
-#: Body length BL = W of this stack: the small robot's body (central link) width w, 5.4 cm.
-BODY_LENGTH = 0.054
 TWO_PI = 2.0 * math.pi
 
 FloatArray = NDArray[np.float64]
@@ -45,12 +47,17 @@ class PairCoordinates(NamedTuple):
     pairs: IntArray     # (P, 2) robot indices, i < j
 
 
-def wrap_angle(angle: ArrayLike) -> FloatArray:
-    """Wrap angles (rad) to [0, 2 pi); NaN stays NaN."""
+def wrap_2pi(angle: ArrayLike) -> FloatArray:
+    """Wrap angles (rad) to [0, 2 pi) (pair angles theta and phi); NaN stays NaN."""
     wrapped = np.mod(np.asarray(angle, dtype=float), TWO_PI)
     # np.mod returns exactly 2 pi for tiny negative inputs; fold that onto 0.
     folded: FloatArray = np.where(wrapped >= TWO_PI, 0.0, wrapped)
     return folded
+
+
+def wrap_pi(angle: float) -> float:
+    """Wrap one angle (rad) to [-pi, pi) (headings)."""
+    return (angle + math.pi) % TWO_PI - math.pi
 
 
 def angular_distance(a: ArrayLike, b: ArrayLike) -> FloatArray:
@@ -63,14 +70,14 @@ def angular_distance(a: ArrayLike, b: ArrayLike) -> FloatArray:
 def to_body_lengths(length: ArrayLike, body_length: float = BODY_LENGTH) -> FloatArray:
     """Convert lengths in metres to body lengths (BL = ``body_length`` m)."""
     if not (math.isfinite(body_length) and body_length > 0.0):
-        raise GliderInputError(f'body_length must be a positive length in metres, got {body_length!r}')
+        raise PairInputError(f'body_length must be a positive length in metres, got {body_length!r}')
     return np.asarray(length, dtype=float) / body_length
 
 
 def pair_indices(n_robots: int) -> IntArray:
     """All unordered pairs ``(i, j)``, ``i < j``, of ``n_robots`` robots as a (P, 2) array."""
     if isinstance(n_robots, bool) or not isinstance(n_robots, (int, np.integer)) or n_robots < 2:
-        raise GliderInputError(f'need at least 2 robots to form a pair, got {n_robots!r}')
+        raise PairInputError(f'need at least 2 robots to form a pair, got {n_robots!r}')
     i, j = np.triu_indices(int(n_robots), k=1)
     return np.stack([i, j], axis=1).astype(np.intp)
 
@@ -80,7 +87,7 @@ def pair_position(pairs: IntArray, i: int, j: int) -> int:
     lo, hi = min(i, j), max(i, j)
     hits = np.flatnonzero((pairs[:, 0] == lo) & (pairs[:, 1] == hi))
     if hits.size == 0:
-        raise GliderInputError(f'no pair ({i}, {j}) among the {len(pairs)} pairs')
+        raise PairInputError(f'no pair ({i}, {j}) among the {len(pairs)} pairs')
     return int(hits[0])
 
 
@@ -90,10 +97,10 @@ def as_pose_array(poses: ArrayLike) -> FloatArray:
     if arr.ndim == 2:
         arr = arr[np.newaxis]
     if arr.ndim != 3 or arr.shape[2] != 3:
-        raise GliderInputError(f'poses must have shape (T, N, 3) or (N, 3) of (x, y, heading), '
+        raise PairInputError(f'poses must have shape (T, N, 3) or (N, 3) of (x, y, heading), '
                                f'got {np.shape(poses)}')
     if arr.shape[1] < 2:
-        raise GliderInputError(f'poses hold {arr.shape[1]} robot(s); a pair needs at least 2')
+        raise PairInputError(f'poses hold {arr.shape[1]} robot(s); a pair needs at least 2')
     arr[~np.all(np.isfinite(arr), axis=2)] = np.nan   # one bad component: the whole pose is unseen
     return arr
 
@@ -104,9 +111,9 @@ def _checked_pairs(pairs: ArrayLike | None, n_robots: int) -> IntArray:
         return pair_indices(n_robots)
     arr = np.asarray(pairs)
     if arr.ndim != 2 or arr.shape[1] != 2 or arr.shape[0] == 0 or not np.issubdtype(arr.dtype, np.integer):
-        raise GliderInputError(f'pairs must be a non-empty (P, 2) integer array, got shape {arr.shape}')
+        raise PairInputError(f'pairs must be a non-empty (P, 2) integer array, got shape {arr.shape}')
     if arr.min() < 0 or arr.max() >= n_robots or np.any(arr[:, 0] == arr[:, 1]):
-        raise GliderInputError(f'pairs must hold two different robot indices in 0..{n_robots - 1}')
+        raise PairInputError(f'pairs must hold two different robot indices in 0..{n_robots - 1}')
     return arr.astype(np.intp)
 
 
@@ -123,9 +130,25 @@ def pair_coordinates(poses: ArrayLike, pairs: ArrayLike | None = None) -> PairCo
     along_normal = dx * cos_h + dy * sin_h       # body y of robot i
     along_axis = dx * sin_h - dy * cos_h         # body x of robot i: (sin h, -cos h)
     r = np.hypot(dx, dy)
-    theta = wrap_angle(np.arctan2(along_normal, along_axis))
-    phi = wrap_angle(b[..., 2] - heading)
+    theta = wrap_2pi(np.arctan2(along_normal, along_axis))
+    phi = wrap_2pi(b[..., 2] - heading)
     return PairCoordinates(r, theta, phi, idx)
+
+
+def one_pair(pose_i: ArrayLike, pose_j: ArrayLike) -> tuple[float, float, float]:
+    """(r m, theta, phi rad) of robot j seen from robot i, for one frame (``pair_coordinates`` of one pair)."""
+    c = pair_coordinates(np.stack([np.asarray(pose_i, dtype=float), np.asarray(pose_j, dtype=float)])[np.newaxis])
+    return float(c.r[0, 0]), float(c.theta[0, 0]), float(c.phi[0, 0])
+
+
+def place_pair(pose1: tuple[float, float, float], r: float, theta: float,
+               phi: float) -> tuple[float, float, float]:
+    """Pose (x, y, heading) of robot j with pair coordinates (r m, theta, phi rad) relative to robot i's ``pose1``.
+
+    The inverse of ``pair_coordinates`` for one pair; the heading comes out in [-pi, pi).
+    """
+    angle = pose1[2] - math.pi / 2.0 + theta
+    return (pose1[0] + r * math.cos(angle), pose1[1] + r * math.sin(angle), wrap_pi(pose1[2] + phi))
 
 
 def pair_centres(poses: ArrayLike, pairs: ArrayLike | None = None) -> FloatArray:
@@ -142,4 +165,4 @@ def circular_mean(cos_sum: ArrayLike, sin_sum: ArrayLike, count: ArrayLike) -> F
     n = np.asarray(count, dtype=float)
     resultant = np.hypot(c, s)
     defined = (n > 0) & (resultant > 1e-9 * np.maximum(n, 1.0))
-    return np.where(defined, wrap_angle(np.arctan2(s, c)), np.nan)
+    return np.where(defined, wrap_2pi(np.arctan2(s, c)), np.nan)

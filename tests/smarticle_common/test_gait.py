@@ -7,8 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from smarticle_driver.gait import (CORNER_SIGNS, DEFAULT_SERVO_SPEED, GaitConfig, GaitError, SquareGait,
-                                   open_loop_angles)
+from smarticle_common.facts import SERVO_SPEED
+
+from smarticle_common.gait import CORNER_SIGNS, GaitConfig, GaitError, SquareGait, open_loop_angles
 
 A = math.radians(90.0)
 
@@ -28,7 +29,7 @@ def test_corners_are_visited_in_documented_order() -> None:
 
 
 def test_one_arm_moves_at_a_time_and_never_faster_than_servo_speed() -> None:
-    config = GaitConfig(alpha_max=A, period=1.6, servo_speed=DEFAULT_SERVO_SPEED)
+    config = GaitConfig(alpha_max=A, period=1.6, servo_speed=SERVO_SPEED)
     gait = SquareGait(config)
     gait.start(0.0)
     times, pos = trace(gait, 0.0, 3.2)
@@ -76,7 +77,7 @@ def test_before_start_the_arms_hold_the_start_pose() -> None:
 
 
 def test_halt_holds_then_resumes_from_held_position_at_next_period() -> None:
-    config = GaitConfig(alpha_max=A, period=1.6, servo_speed=DEFAULT_SERVO_SPEED)
+    config = GaitConfig(alpha_max=A, period=1.6, servo_speed=SERVO_SPEED)
     gait = SquareGait(config)
     gait.start(0.0)
     t_halt = 0.4 + 0.05  # quarter 1: arm 2 moving from +A toward -A

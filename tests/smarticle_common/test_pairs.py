@@ -7,10 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from smarticle_tracking.errors import GliderInputError
-from smarticle_tracking.pairs import (BODY_LENGTH, angular_distance, circular_mean, pair_centres,
+from smarticle_common.errors import PairInputError
+from smarticle_common.pairs import (BODY_LENGTH, angular_distance, circular_mean, pair_centres,
                                      pair_coordinates, pair_indices, pair_position, to_body_lengths,
-                                     wrap_angle)
+                                     one_pair, place_pair, wrap_2pi, wrap_pi)
 
 UP = math.pi / 2    # robot faces +y: body axis (joint 1 -> joint 2) is +x
 
@@ -96,7 +96,7 @@ def test_all_pairs_over_frames_have_shape_t_by_p() -> None:
 
 def test_pair_indices_are_upper_triangle_in_order() -> None:
     assert pair_indices(3).tolist() == [[0, 1], [0, 2], [1, 2]]
-    with pytest.raises(GliderInputError):
+    with pytest.raises(PairInputError):
         pair_indices(1)
 
 
@@ -112,20 +112,20 @@ def test_unseen_robot_gives_nan_only_for_its_pairs() -> None:
 
 
 def test_bad_pose_shapes_are_rejected_with_a_value_error() -> None:
-    with pytest.raises(GliderInputError, match=r'\(T, N, 3\)'):
+    with pytest.raises(PairInputError, match=r'\(T, N, 3\)'):
         pair_coordinates(np.zeros((5, 3, 2)))
     with pytest.raises(ValueError, match='at least 2'):
         pair_coordinates(np.zeros((5, 1, 3)))
 
 
 def test_wrap_angle_and_units() -> None:
-    assert float(wrap_angle(-1e-18)) == 0.0       # np.mod alone would give exactly 2 pi
-    assert float(wrap_angle(-math.pi / 2)) == pytest.approx(1.5 * math.pi)
-    assert np.isnan(wrap_angle(np.nan))
+    assert float(wrap_2pi(-1e-18)) == 0.0       # np.mod alone would give exactly 2 pi
+    assert float(wrap_2pi(-math.pi / 2)) == pytest.approx(1.5 * math.pi)
+    assert np.isnan(wrap_2pi(np.nan))
     assert float(to_body_lengths(0.108)) == pytest.approx(2.0)
     assert BODY_LENGTH == 0.054
     assert float(to_body_lengths(0.1, body_length=0.05)) == pytest.approx(2.0)
-    with pytest.raises(GliderInputError):
+    with pytest.raises(PairInputError):
         to_body_lengths(1.0, body_length=0.0)
 
 
@@ -135,3 +135,21 @@ def test_circular_mean_handles_wrap_and_empty() -> None:
     assert float(angular_distance(mean, 0.0)) == pytest.approx(0.0, abs=1e-12)
     assert np.isnan(circular_mean(0.0, 0.0, 0))
     assert np.isnan(circular_mean(0.0, 0.0, 2))    # opposite angles cancel: no mean direction
+
+
+def test_place_pair_inverts_pair_coordinates() -> None:
+    pose1 = (0.1, -0.05, 0.7)
+    r, theta, phi = 1.3 * 0.054, math.radians(60), math.radians(200)
+    pose2 = place_pair(pose1, r, theta, phi)
+    assert np.allclose(one_pair(pose1, pose2), (r, theta, phi))
+    assert -math.pi <= pose2[2] < math.pi
+    # theta = 0 is along robot 1's body x axis (its arm-2 side), 90 deg straight ahead along its normal
+    side = place_pair((0.0, 0.0, math.pi / 2), 1.0, 0.0, 0.0)
+    ahead = place_pair((0.0, 0.0, math.pi / 2), 1.0, math.pi / 2, 0.0)
+    assert np.allclose(side[:2], (1.0, 0.0)) and np.allclose(ahead[:2], (0.0, 1.0))
+
+
+def test_wrap_pi_is_the_heading_range() -> None:
+    assert wrap_pi(math.pi) == pytest.approx(-math.pi)
+    assert wrap_pi(-math.pi) == pytest.approx(-math.pi)
+    assert wrap_pi(3 * math.pi / 2) == pytest.approx(-math.pi / 2)

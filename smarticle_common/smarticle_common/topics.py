@@ -2,7 +2,7 @@
 
 Hardware nodes, the simulation bridge, the feedback controller, the tracker, the glider monitor and
 the bag tools all take their topic names and types from here; ``docs/topics.md`` shows the same table
-(``python -m smarticle_driver.topics`` prints it, and a test keeps the two equal).
+(``python -m smarticle_common.topics`` prints it, and a test keeps the two equal).
 
 This module imports no ROS code at import time, so pure cores and offline tools can use the names.
 ``message_class`` and ``qos_profile`` import the ROS packages only when called.

@@ -6,14 +6,14 @@ from pathlib import Path
 
 import pytest
 
-from smarticle_driver import topics
+from smarticle_common import topics
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_doc_page_shows_the_same_table_as_the_module() -> None:
     doc = (ROOT / 'docs' / 'topics.md').read_text()
-    assert topics.markdown_table() in doc, 'regenerate with: python -m smarticle_driver.topics'
+    assert topics.markdown_table() in doc, 'regenerate with: python -m smarticle_common.topics'
 
 
 @pytest.mark.parametrize('spec', topics.TOPICS, ids=lambda s: s.key)

@@ -25,16 +25,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from .facts import GAIT_PERIOD, SERVO_SPEED
+
 #: Arm index moved in each quarter of the period.
 MOVING_ARM: tuple[int, int, int, int] = (0, 1, 0, 1)
 #: Corner signs (alpha1, alpha2) in traversal order.
 CORNER_SIGNS: tuple[tuple[int, int], ...] = ((1, 1), (-1, 1), (-1, -1), (1, -1))
 
 ALPHA_MAX_RANGE_DEG = (5.0, 120.0)
-DEFAULT_PERIOD = 1.6
-#: Default servo speed: 0.1 s per 60 degrees (a common hobby-servo rating), which lets a 120 degree
-#: amplitude (240 degree stroke) finish within a 0.4 s quarter.
-DEFAULT_SERVO_SPEED = math.radians(60.0) / 0.1
 
 
 class GaitError(ValueError):
@@ -46,8 +44,8 @@ class GaitConfig:
     """Square-gait settings, SI units (radians, seconds)."""
 
     alpha_max: float = math.radians(90.0)
-    period: float = DEFAULT_PERIOD
-    servo_speed: float = DEFAULT_SERVO_SPEED
+    period: float = GAIT_PERIOD
+    servo_speed: float = SERVO_SPEED
     phase: float = 0.0
 
     def __post_init__(self) -> None:
@@ -69,8 +67,8 @@ class GaitConfig:
                 'raise servo_speed or period, or lower alpha_max')
 
     @classmethod
-    def from_degrees(cls, alpha_max_deg: float, period: float = DEFAULT_PERIOD,
-                     servo_speed: float = DEFAULT_SERVO_SPEED, phase: float = 0.0) -> GaitConfig:
+    def from_degrees(cls, alpha_max_deg: float, period: float = GAIT_PERIOD,
+                     servo_speed: float = SERVO_SPEED, phase: float = 0.0) -> GaitConfig:
         """Build a config with the amplitude given in degrees."""
         return cls(math.radians(alpha_max_deg), period, servo_speed, phase)
 

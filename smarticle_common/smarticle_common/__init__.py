@@ -1,0 +1,29 @@
+"""The common contract of the smarticle stack: what every other package agrees on.
+
+Modules (no rclpy import in any of them except ``params.spin_node`` / ``declare_and_read``, which import
+it when called):
+
+* ``facts``: robot facts, defined once (``RobotSpec``, ``SMALL``, ``FEEDBACK``, ``GAIT_PERIOD``,
+  ``SERVO_SPEED``, ``TAG_SIZE``, ``TAG_DICTIONARY``, ``R_BIND_BL``, ``BODY_LENGTH``);
+* ``topics``: the topic contract (names, types, QoS kinds, frames, units), documented in docs/topics.md;
+* ``gait``: the square gait core that the gait node and the sim's gait controller both run;
+* ``pairs``: pair coordinates r, theta, phi (the one implementation; metres and radians);
+* ``poses``: planar pose <-> quaternion conversions;
+* ``commands``: the joint-command checks shared by the servo bridge and the sim bridge;
+* ``params``: parameter tables (``ParamSpec``), shipped YAML defaults and the node helper;
+* ``launching``: the process launcher of tests, benchmarks and the demo;
+* ``errors``: ``CommonError`` and its subclasses.
+"""
+
+from __future__ import annotations
+
+from .facts import (BODY_LENGTH, FEEDBACK, GAIT_PERIOD, PRESETS, R_BIND_BL, SERVO_SPEED, SMALL, TAG_DICTIONARY,
+                    TAG_SIZE, RobotSpec, robot_preset)
+from .gait import GaitCommand, GaitConfig, GaitError, SquareGait
+from .pairs import PairCoordinates, one_pair, pair_coordinates, place_pair, wrap_2pi, wrap_pi
+
+__all__ = [
+    'BODY_LENGTH', 'FEEDBACK', 'GAIT_PERIOD', 'PRESETS', 'R_BIND_BL', 'SERVO_SPEED', 'SMALL', 'TAG_DICTIONARY',
+    'TAG_SIZE', 'GaitCommand', 'GaitConfig', 'GaitError', 'PairCoordinates', 'RobotSpec', 'SquareGait', 'one_pair',
+    'pair_coordinates', 'place_pair', 'robot_preset', 'wrap_2pi', 'wrap_pi',
+]
