@@ -4,4 +4,4 @@ set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 source "$ROOT/tools/bootstrap.sh"
 cd "$ROOT"
-exec python -m smarticle_sim.demo "$@"
+exec python -m smarticle_bringup.demo "$@"

@@ -27,7 +27,7 @@ setup(
         'console_scripts': [
             'tracker = smarticle_tracking.tracker_node:main',
             'glider_monitor = smarticle_tracking.glider_monitor_node:main',
-            'tracker_calibrate = smarticle_tracking.calibrate_cli:entry',
+            'smarticle-tracker-calibrate = smarticle_tracking.homography_cli:entry',
         ],
     },
 )

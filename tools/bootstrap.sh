@@ -6,7 +6,7 @@ set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 VENV="${SMARTICLE_VENV:-$ROOT/.venv}"
 PY="${PYTHON:-python3}"
-PACKAGES=(smarticle_common smarticle_driver smarticle_sim smarticle_feedback smarticle_tracking bags/smarticle_bags)
+PACKAGES=(smarticle_common smarticle_driver smarticle_sim smarticle_feedback smarticle_tracking bags/smarticle_bags smarticle_bringup)
 
 stamp_of() {
   # everything that changes what gets installed

@@ -26,7 +26,7 @@ from typing import Any, TextIO
 
 from smarticle_common import topics
 from smarticle_driver import maestro
-from smarticle_driver.calibration import (FsrModel, ServoCalibration, default_config_dir,
+from smarticle_driver.board_calibration import (FsrModel, ServoCalibration, default_config_dir,
                                           load_fsr_calibration, load_servo_calibration)
 from smarticle_driver.emulator import EmulatorError, MaestroEmulator, TargetRecord
 from smarticle_driver.errors import DriverError

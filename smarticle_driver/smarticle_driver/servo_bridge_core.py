@@ -25,7 +25,7 @@ from typing import Any
 from smarticle_common import topics
 from smarticle_driver.boards import BOARD_KINDS, ServoBoard, make_board
 from smarticle_common.commands import check_command
-from smarticle_driver.calibration import (FsrModel, ServoCalibration, default_config_dir,
+from smarticle_driver.board_calibration import (FsrModel, ServoCalibration, default_config_dir,
                                           load_fsr_calibration, load_servo_calibration)
 from smarticle_driver.errors import BridgeConfigError, PortUnavailable, ReplyError
 from smarticle_common.facts import SERVO_SPEED

@@ -150,7 +150,7 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
 
 def default_feedback_config() -> FeedbackConfig:
     """The controller config of the shipped defaults (config/feedback.yaml)."""
-    from .settings import config_from_values, default_values
+    from .parameters import config_from_values, default_values
 
     return config_from_values(default_values())
 

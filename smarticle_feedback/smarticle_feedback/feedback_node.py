@@ -19,7 +19,7 @@ from smarticle_common.params import ParameterError, declare_and_read, spin_node
 
 from .controller import ImpactController, check_sample
 from .errors import FsrSampleError
-from .settings import NODE_NAME, PARAMS, config_from_values
+from .parameters import NODE_NAME, PARAMS, config_from_values
 
 
 def _msg(key: str) -> Any:

@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any, Callable, Sequence
 
 import numpy as np
+from smarticle_common.poses import body_heading
 from smarticle_common.topics import FSR_FACES
 
 from .errors import SimError, SimTrouble
@@ -86,20 +87,15 @@ class _PoseReader:
 
     def read(self, poses: np.ndarray, arms: np.ndarray) -> None:
         """Write (N, 3) x, y, heading of the body normal into ``poses`` and (N, 2) alphas into ``arms``."""
-        pose, joints, atan2 = self._pose, self._joints, math.atan2
+        pose, joints = self._pose, self._joints
         pose_rows, arm_rows = [], []
         for body in self._bodies:
-            (x, y, _), (qx, qy, qz, qw) = pose(body)
-            yaw = atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
-            pose_rows.append((x, y, (yaw + _HALF_PI + math.pi) % _TWO_PI - math.pi))
+            (x, y, _), quat = pose(body)
+            pose_rows.append((x, y, body_heading(*quat)))
             first, second = joints(body, ARM_JOINTS)
             arm_rows.append((first[0], second[0]))
         poses[...] = pose_rows
         arms[...] = arm_rows
-
-
-_HALF_PI = math.pi / 2.0
-_TWO_PI = 2.0 * math.pi
 
 
 def run_trial(config: SimConfig, scene: Scene, periods: float, sample_every: int | None = None,

@@ -26,6 +26,7 @@ from typing import Sequence
 import numpy as np
 import pybullet
 from pybullet_utils.bullet_client import BulletClient
+from smarticle_common.poses import body_headings_and_tilts
 from smarticle_common.topics import FSR_FACES
 
 from .settings import SimConfig
@@ -255,7 +256,7 @@ class Physics:
             (a1, v1, _, _), (a2, v2, _, _) = joints(body, ARM_JOINTS)
             arms[k] = a1, a2
             arm_vel[k] = v1, v2
-        heading, tilt = _heading_and_tilt(quat)
+        heading, tilt = body_headings_and_tilts(quat)
         poses = np.column_stack([pos[:, 0], pos[:, 1], heading])
         return PhysicsState(self.time, poses, pos, tilt, np.linalg.norm(vel, axis=1), arms, arm_vel)
 
@@ -326,7 +327,7 @@ class Physics:
             positions, tilt, speed, arms = s.positions, s.tilt, s.speed, s.arm_angles
         else:
             positions, quat = self._read_bases()
-            tilt = _heading_and_tilt(quat)[1]
+            tilt = body_headings_and_tilts(quat)[1]
             last_time, last_positions = self._last_check
             if last_positions is not None and now > last_time:
                 speed = np.linalg.norm(positions - last_positions, axis=1) / (now - last_time)
@@ -369,15 +370,6 @@ class Physics:
     def __exit__(self, *exc: object) -> None:
         """Disconnect the client."""
         self.close()
-
-
-def _heading_and_tilt(quat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Heading of the body normal in [-pi, pi) and tilt from vertical (rad) from (N, 4) xyzw quaternions."""
-    qx, qy, qz, qw = quat.T
-    yaw = np.arctan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
-    heading = (yaw + math.pi / 2.0 + math.pi) % (2.0 * math.pi) - math.pi
-    cos_tilt = np.clip(1.0 - 2.0 * (qx * qx + qy * qy), -1.0, 1.0)
-    return heading, np.arccos(cos_tilt)
 
 
 def _quiet_client() -> BulletClient:

@@ -10,19 +10,19 @@ For every robot k it subscribes to ``/smarticle_<k>/joint_commands`` and publish
 from __future__ import annotations
 
 import array
-import math
+import functools
 import re
 import time
 from typing import Any
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
-from geometry_msgs.msg import Pose
 from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.time import Time
 from smarticle_common import topics
+from smarticle_common.messages import pose_message
 from smarticle_common.params import ParameterError, declare_and_read
 
 from .bridge import NODE_NAME, PARAMS, BridgeSettings, SimBridgeCore
@@ -66,7 +66,7 @@ class SimBridgeNode(Node):
                                                 event_callbacks=quiet) for k in range(n)]
         for k in range(n):
             self.create_subscription(self.JointState, topics.topic('joint_commands', k),
-                                     lambda msg, k=k: self.on_command(k, msg), qos['joint_commands'])
+                                     functools.partial(self.on_command, k), qos['joint_commands'])
         # frames are published reliable (the contract's image QoS; it also serves best-effort subscribers):
         # a 2 MB frame is ~30 UDP fragments, and over best effort one lost fragment loses it (docs/tracking.md)
         self.image_pub = self.create_publisher(_msg('image_raw'), topics.topic('image_raw'), qos['image_raw'])
@@ -142,7 +142,7 @@ class SimBridgeNode(Node):
         array = self.PoseArray()
         array.header.stamp = now
         array.header.frame_id = topics.ARENA_FRAME
-        array.poses = [self._pose(p) for p in poses]
+        array.poses = [pose_message(p) for p in poses]
         self.poses_pub.publish(array)
         for k, pub in enumerate(self.pose_pubs):
             if pub.get_subscription_count() > 0:
@@ -172,13 +172,6 @@ class SimBridgeNode(Node):
                                           distortion_model=info.distortion_model, d=info.d, k=info.k,
                                           r=info.r, p=info.p)
         self.info_pub.publish(camera_info)
-
-    def _pose(self, xyh: Any) -> Any:
-        """geometry_msgs/Pose of a planar pose (yaw = heading of the body normal)."""
-        pose = Pose()
-        pose.position.x, pose.position.y = float(xyh[0]), float(xyh[1])
-        pose.orientation.z, pose.orientation.w = math.sin(xyh[2] / 2.0), math.cos(xyh[2] / 2.0)
-        return pose
 
     def publish_diagnostics(self, level: int, message: str, rtf: float) -> None:
         """Publish the bridge's status and counters on /diagnostics."""

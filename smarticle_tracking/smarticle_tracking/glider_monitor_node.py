@@ -9,6 +9,7 @@ DiagnosticStatus per bound pair) and ``/smarticles/markers`` (robot outlines and
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from typing import Any
@@ -20,6 +21,7 @@ from geometry_msgs.msg import Point
 from rclpy.node import Node
 from rclpy.time import Time
 from smarticle_common import topics
+from smarticle_common.messages import planar_poses
 from smarticle_common.params import ParameterError, declare_and_read, spin_node
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
@@ -27,21 +29,9 @@ from visualization_msgs.msg import Marker, MarkerArray
 from .errors import GliderError
 from .glider_monitor import BoundPair, GliderMonitor
 from .markers import MarkerShape, scene_markers
-from .settings import MONITOR_NODE, MONITOR_PARAMS, monitor_settings
+from .parameters import MONITOR_NODE, MONITOR_PARAMS, monitor_settings
 
 _KINDS = {'line_list': Marker.LINE_LIST, 'text': Marker.TEXT_VIEW_FACING}
-
-
-def planar_poses(msg: Any) -> np.ndarray:
-    """(N, 3) x, y, heading of a PoseArray; a non-finite position or orientation gives a NaN row."""
-    out = np.full((len(msg.poses), 3), np.nan)
-    for k, pose in enumerate(msg.poses):
-        p, q = pose.position, pose.orientation
-        heading = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
-        row = (p.x, p.y, heading)
-        if all(math.isfinite(v) for v in row):
-            out[k] = row
-    return out
 
 
 def glider_status(pair: BoundPair, body_length: float) -> DiagnosticStatus:
@@ -124,7 +114,7 @@ class GliderMonitorNode(Node):
         qos = topics.qos_profile(topics.spec_of('joint_states').qos)
         for k in range(start, n_robots):
             self.create_subscription(joint_type, topics.topic('joint_states', k),
-                                     lambda msg, k=k: self.on_joint_state(k, msg), qos)
+                                     functools.partial(self.on_joint_state, k), qos)
 
     def on_joint_state(self, robot: int, msg: Any) -> None:
         """Keep the latest arm angles of ``robot`` (joint names arm1, arm2)."""

@@ -23,7 +23,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from .calibration import Calibration
+from .homography import Calibration
 from .errors import FrameEncodingError, FrameSizeError, TrackerConfigError, TrackerInputError
 from smarticle_common.facts import TAG_DICTIONARY, TAG_SIZE
 

@@ -16,24 +16,16 @@ from typing import Any
 import numpy as np
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import Pose, PoseArray, PoseStamped
+from geometry_msgs.msg import PoseArray, PoseStamped
 from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.node import Node
 from smarticle_common import topics
+from smarticle_common.messages import pose_message
 from smarticle_common.params import ParameterError, declare_and_read, spin_node
 
 from .errors import CalibrationError, FrameEncodingError, FrameSizeError, TrackerError
-from .settings import TRACKER_NODE, TRACKER_PARAMS, tracker_calibration, tracker_config
+from .parameters import TRACKER_NODE, TRACKER_PARAMS, tracker_calibration, tracker_config
 from .tracker import TagTracker, image_from_buffer
-
-
-def pose_message(xyh: np.ndarray) -> Pose:
-    """geometry_msgs/Pose of a planar pose; a NaN pose keeps NaN position and a NaN orientation."""
-    pose = Pose()
-    x, y, heading = (float(v) for v in xyh)
-    pose.position.x, pose.position.y = x, y
-    pose.orientation.z, pose.orientation.w = math.sin(heading / 2.0), math.cos(heading / 2.0)
-    return pose
 
 
 class TrackerNode(Node):

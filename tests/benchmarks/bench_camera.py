@@ -30,7 +30,7 @@ from smarticle_common import topics
 from smarticle_common.gait import GaitConfig, SquareGait
 from smarticle_sim.bridge import BridgeSettings, SimBridgeCore
 from smarticle_sim.camera import CameraConfig, OverheadCamera
-from smarticle_tracking.calibrate_cli import sim_calibration
+from smarticle_bringup.sim_camera import sim_calibration
 from smarticle_tracking.tracker import TagTracker, TrackerConfig
 
 RESOLUTIONS = ((640, 480), (1280, 720), (1920, 1080))

@@ -29,7 +29,7 @@ from smarticle_sim.camera import CameraConfig, OverheadCamera
 from smarticle_sim.scenes import dense_scene
 from smarticle_sim.settings import SimConfig
 from smarticle_sim.runner import Runner
-from smarticle_tracking.calibrate_cli import sim_calibration
+from smarticle_bringup.sim_camera import sim_calibration
 from smarticle_tracking.tracker import TagTracker, TrackerConfig
 
 RESOLUTIONS = ((640, 480), (1280, 720), (1920, 1080))

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from smarticle_common import topics
-from smarticle_driver.calibration import FsrModel, load_fsr_calibration, load_servo_calibration
+from smarticle_driver.board_calibration import FsrModel, load_fsr_calibration, load_servo_calibration
 from smarticle_driver.emulator import MaestroEmulator
 from smarticle_driver.errors import BridgeConfigError
 from smarticle_driver.maestro import MaestroBoard

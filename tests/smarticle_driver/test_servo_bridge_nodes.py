@@ -16,7 +16,7 @@ from typing import Any
 import pytest
 
 from smarticle_common import topics
-from smarticle_driver.calibration import load_fsr_calibration, load_servo_calibration
+from smarticle_driver.board_calibration import load_fsr_calibration, load_servo_calibration
 from smarticle_driver.emulator import MaestroEmulator, TargetRecord
 from smarticle_common.gait import CORNER_SIGNS
 from tests.conftest import spin_until

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from smarticle_common import topics
-from smarticle_driver.calibration import (DividerFsr, ServoCalibration, TableFsr, default_config_dir,
+from smarticle_driver.board_calibration import (DividerFsr, ServoCalibration, TableFsr, default_config_dir,
                                           load_fsr_calibration, load_servo_calibration)
 from smarticle_driver.errors import CalibrationError
 

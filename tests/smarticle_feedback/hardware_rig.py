@@ -15,7 +15,7 @@ from typing import Any
 
 from smarticle_common import topics
 from smarticle_driver import maestro
-from smarticle_driver.calibration import default_config_dir, load_fsr_calibration
+from smarticle_driver.board_calibration import default_config_dir, load_fsr_calibration
 from smarticle_driver.emulator import MaestroEmulator, TargetRecord
 from smarticle_common.launching import ProcessGroup
 from smarticle_driver.servo_bridge_core import FSR_CALIBRATION_FILE

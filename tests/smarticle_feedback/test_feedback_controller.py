@@ -10,7 +10,7 @@ from smarticle_common.topics import FSR_FACES
 
 from smarticle_feedback.controller import FeedbackConfig, ImpactController, ImpactWindow, check_sample
 from smarticle_feedback.errors import FeedbackConfigError, FsrSampleError
-from smarticle_feedback.settings import NODE_NAME, PARAMS, config_from_values, default_values
+from smarticle_feedback.parameters import NODE_NAME, PARAMS, config_from_values, default_values
 from tests.conftest import ROOT
 
 QUIET = (0.0, 0.0, 0.0, 0.0)

@@ -11,7 +11,7 @@ from smarticle_common.params import read_defaults_yaml
 from smarticle_tracking.glider_monitor import GliderMonitor
 from smarticle_tracking.gliders import GliderClass, GliderConfig
 from smarticle_tracking.markers import CLASS_COLOURS, ROBOT_COLOUR, RobotDims, render_png, robot_outline, scene_markers
-from smarticle_tracking.settings import (CONFIG_DIR, MONITOR_NODE, MONITOR_PARAMS, TRACKER_NODE, TRACKER_PARAMS,
+from smarticle_tracking.parameters import (CONFIG_DIR, MONITOR_NODE, MONITOR_PARAMS, TRACKER_NODE, TRACKER_PARAMS,
                                          SettingsError, monitor_settings, parse_tag_ids, tracker_config)
 
 from glider_scenes import pair_scene, periods

@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 from smarticle_sim.bridge import BridgeSettings, SimBridgeCore
 from smarticle_sim.camera import CameraConfig, OverheadCamera
-from smarticle_tracking.calibration import (Calibration, board_targets, calibrate, load_calibration,
+from smarticle_tracking.homography import (Calibration, board_targets, calibrate, load_calibration,
                                             save_calibration)
-from smarticle_tracking.calibrate_cli import main as calibrate_main
-from smarticle_tracking.calibrate_cli import sim_calibration
+from smarticle_tracking.homography_cli import main as calibrate_main
+from smarticle_bringup.sim_camera import sim_calibration
 from smarticle_tracking.errors import CalibrationError, TrackerConfigError, TrackerInputError
-from smarticle_tracking.settings import SIM_CALIBRATION
+from smarticle_tracking.parameters import SIM_CALIBRATION
 from smarticle_tracking.tracker import (TagDetector, TagTracker, TrackerConfig, image_from_buffer,
                                         poses_from_corners, tag_corners)
 

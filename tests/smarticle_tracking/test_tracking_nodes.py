@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from smarticle_common import topics
 from smarticle_sim.camera import CameraConfig, OverheadCamera
-from smarticle_tracking.calibrate_cli import sim_calibration
-from smarticle_tracking.calibration import save_calibration
+from smarticle_bringup.sim_camera import sim_calibration
+from smarticle_tracking.homography import save_calibration
 
 from glider_scenes import pair_scene, periods
 from tests.conftest import spin_until

@@ -10,6 +10,7 @@ Usage: ``./demo.sh [--robots 7] [--periods 60] [--alpha-max 90] [--seed 1] [--no
 from __future__ import annotations
 
 import argparse
+import functools
 import math
 import shutil
 import sys
@@ -48,11 +49,6 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def yaw(qz: np.ndarray, qw: np.ndarray) -> np.ndarray:
-    """Heading (rad) of planar quaternions (rotation about z)."""
-    return 2.0 * np.arctan2(qz, qw)
-
-
 def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.ndarray, float]:
     """Run sim bridge + gait nodes; return sample times (s after the start), poses (T, N, 3), RTF."""
     import os
@@ -62,10 +58,11 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
     from geometry_msgs.msg import PoseArray
     from rclpy.qos import QoSProfile, ReliabilityPolicy
     from smarticle_common import topics
+    from smarticle_common.messages import planar_poses
     from smarticle_bags.recording import start_recording
     from smarticle_common.launching import DomainReservation, ProcessGroup, isolated_ros_env
 
-    from .bridge import BridgeSettings
+    from smarticle_sim.bridge import BridgeSettings
 
     reservation = None if 'ROS_DOMAIN_ID' in os.environ else DomainReservation()
     env = isolated_ros_env(reservation.domain_id if reservation else None)
@@ -76,8 +73,7 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
 
     def on_poses(msg: Any) -> None:
         stamp = msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
-        samples[stamp] = np.array([[p.position.x, p.position.y, p.orientation.z, p.orientation.w]
-                                   for p in msg.poses])
+        samples[stamp] = planar_poses(msg)
 
     live: dict[str, Any] = {}
 
@@ -91,12 +87,14 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
     node.create_subscription(DiagnosticArray, topics.topic('gliders'), on_gliders,
                              topics.qos_profile(topics.spec_of('gliders').qos))
     halts = [0] * args.robots
+
+    def count_halt(robot: int, _msg: Any) -> None:
+        halts[robot] += 1
     if args.feedback:
         from std_msgs.msg import Header
 
         for k in range(args.robots):
-            node.create_subscription(Header, topics.topic('halt', k),
-                                     lambda _msg, k=k: halts.__setitem__(k, halts[k] + 1),
+            node.create_subscription(Header, topics.topic('halt', k), functools.partial(count_halt, k),
                                      topics.qos_profile(topics.spec_of('halt').qos))
     bag = log_dir.parent / 'bag'
     if bag.exists():
@@ -108,7 +106,8 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
             scene_args = [arg for key, value in scene.items() for arg in ('-p', f'{key}:={value}')]
             robots = BridgeSettings.defaults(alpha_max_deg=args.alpha_max, **scene).scene().robots  # their phases
             for k in range(args.robots):
-                phase = robots[k].gait.phase if robots[k].gait is not None else 0.0
+                gait = robots[k].gait
+                phase = gait.phase if gait is not None else 0.0
                 group.start('gait', '--ros-args', '-p', f'robot_id:={k}', '-p', 'lockstep:=true',
                             '-p', 'use_sim_time:=true', '-p', f'phase:={phase!r}', *common)
                 if args.feedback:
@@ -155,8 +154,7 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
         if reservation is not None:
             reservation.close()
     stamps = np.array(sorted(samples))
-    raw = np.array([samples[s] for s in stamps])
-    poses = np.concatenate([raw[..., :2], yaw(raw[..., 2], raw[..., 3])[..., None]], axis=-1)
+    poses = np.array([samples[s] for s in stamps])
     rtf = (stamps[-1] * 1e-9) / wall if len(stamps) else 0.0
     return stamps * 1e-9 - START_AT, poses, rtf
 
@@ -220,5 +218,10 @@ def plot_trajectories(times: np.ndarray, poses: np.ndarray, width: float, path: 
     fig.savefig(path)
 
 
+def entry() -> None:
+    """Console-script entry point."""
+    raise SystemExit(main())
+
+
 if __name__ == '__main__':
-    sys.exit(main())
+    entry()

@@ -14,7 +14,7 @@ import pytest
 @pytest.mark.slow
 def test_demo_runs_the_stack_and_writes_its_outputs(tmp_path: Path) -> None:
     out = tmp_path / 'demo'
-    proc = subprocess.run([sys.executable, '-m', 'smarticle_sim.demo', '--robots', '3', '--periods', '4',
+    proc = subprocess.run([sys.executable, '-m', 'smarticle_bringup.demo', '--robots', '3', '--periods', '4',
                            '--out', str(out)], capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     assert 'gliders (pairs bound' in proc.stdout and 'net displacement' in proc.stdout
@@ -39,7 +39,7 @@ def test_demo_runs_the_stack_and_writes_its_outputs(tmp_path: Path) -> None:
 @pytest.mark.slow
 def test_demo_without_feedback_runs_the_open_loop_gait_only(tmp_path: Path) -> None:
     out = tmp_path / 'demo'
-    proc = subprocess.run([sys.executable, '-m', 'smarticle_sim.demo', '--robots', '2', '--periods', '3',
+    proc = subprocess.run([sys.executable, '-m', 'smarticle_bringup.demo', '--robots', '2', '--periods', '3',
                            '--no-feedback', '--out', str(out)], capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     assert 'feedback' not in proc.stdout.split('started')[0] and 'feedback halts' not in proc.stdout

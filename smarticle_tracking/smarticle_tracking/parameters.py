@@ -1,7 +1,7 @@
 """Parameters of the tracking nodes, declared once (ParamSpec tables) and read into frozen configs.
 
 ``TRACKER_PARAMS`` (node ``tracker``) and ``MONITOR_PARAMS`` (node ``glider_monitor``) are shipped as
-``config/tracker.yaml`` and ``config/glider_monitor.yaml`` (``python -m smarticle_tracking.settings``
+``config/tracker.yaml`` and ``config/glider_monitor.yaml`` (``python -m smarticle_tracking.parameters``
 rewrites them; a test keeps them equal). No rclpy here.
 """
 
@@ -14,7 +14,7 @@ from typing import Any
 
 from smarticle_common.params import ParamSpec, defaults_yaml
 
-from .calibration import Calibration, load_calibration
+from .homography import Calibration, load_calibration
 from .gliders import GliderConfig
 from .markers import RobotDims
 from smarticle_common.pairs import BODY_LENGTH
