@@ -19,7 +19,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from smarticle_common.facts import GAIT_PERIOD
+from smarticle_common.facts import GAIT_PERIOD, SMALL
+from smarticle_common.runs import Recording, save_npz
 
 START_AT = 0.5  # sim time (s) of the synchronised gait start
 RECORDED = ('poses', 'clock', 'start', 'gliders', 'markers')  # contract keys of the topics the demo records
@@ -175,7 +176,9 @@ def main(argv: list[str] | None = None) -> int:
     times, poses, rtf = run_stack(args, args.out / 'logs')
     keep = times >= 0.0
     times, poses = times[keep], poses[keep]
-    np.savez_compressed(args.out / 'poses.npz', time=times, poses=poses)
+    save_npz(Recording.from_poses(times, poses, SMALL.body_length,
+                                  {'source': 'demo: /smarticles/poses over DDS', 'periods': args.periods,
+                                   'seed': args.seed, 'scene': args.scene}), args.out / 'poses.npz')
     config = GliderConfig(min_periods=args.min_periods)
     analysis = analyse_gliders(times, poses, config)
     rows = glider_table(analysis.gliders, config)

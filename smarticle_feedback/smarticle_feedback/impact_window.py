@@ -107,7 +107,7 @@ def c2_mask(poses: np.ndarray, tolerance: float) -> np.ndarray:
 def calibrate_recording(path: str | Path, floor: float = DEFAULT_FLOOR, low: float = 80.0, high: float = 100.0,
                         c2_only: bool = False, c2_tolerance: float = math.radians(45.0)) -> WindowSuggestion:
     """Load an npz of ``smarticle-sim run --fsr`` and suggest an impact window."""
-    from smarticle_sim.batch import load_npz
+    from smarticle_common.runs import load_npz
 
     rec = load_npz(path)
     if not rec.meta.get('fsr_recorded') or not rec.meta.get('contacts_recorded'):

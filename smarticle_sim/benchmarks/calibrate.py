@@ -37,7 +37,8 @@ import numpy as np
 from smarticle_common.gait import GaitConfig
 from smarticle_tracking.gliders import GliderClass, GliderConfig, analyse_gliders
 
-from smarticle_sim.batch import Recording, run_trial
+from smarticle_common.runs import Recording
+from smarticle_sim.batch import run_trial
 from smarticle_sim.errors import SceneError
 from smarticle_sim.scenes import RobotPlacement, Scene, dense_scene, pair_scene
 from smarticle_common.facts import RobotSpec

@@ -1,28 +1,22 @@
 """A batch trial: run a scene for N gait periods through the one ``Runner`` loop and record its ground truth.
 
-The npz format (``docs/sim_core.md``): S samples, N robots, arrays
-
-* ``time`` (S,) s; ``poses`` (S, N, 3) x (m), y (m), heading of the body normal (rad);
-* ``arm_angles`` (S, N, 2) rad; ``fsr`` (S, N, 4) N, faces in ``fsr_faces`` order (zeros if not recorded);
-* ``contacts`` (S, N, N) bool, robot-robot contact at the sample (False if not recorded);
-
+The trial comes back as a ``smarticle_common.runs.Recording`` (the one run format on disk, npz).
 Samples are taken at ``DEFAULT_SAMPLE_RATE`` (20 Hz) unless asked otherwise; FSR and contacts are
 recorded only when asked (``record_fsr``, ``record_contacts``), so a default run costs little more than
 stepping (poses: two PyBullet calls per robot per sample, written into preallocated arrays).
 The heading follows ``Physics.poses`` (body normal, [-pi, pi)).
-* ``body_length`` () m; ``meta`` () JSON string of the settings, scene and outcome.
 """
 
 from __future__ import annotations
 
-import json
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
 import numpy as np
 from smarticle_common.poses import body_heading
+from smarticle_common.runs import Recording
 from smarticle_common.topics import FSR_FACES
 
 from .errors import SimError, SimTrouble
@@ -34,24 +28,6 @@ from .settings import SimConfig
 #: Builds the extra controllers of a trial (e.g. feedback) from its physics and gait controller; they run
 #: before the gait controller in every tick.
 ControllerFactory = Callable[[Physics, GaitController], Sequence[Controller]]
-
-
-@dataclass
-class Recording:
-    """Sampled ground truth of one trial (arrays as in the module docstring)."""
-
-    time: np.ndarray
-    poses: np.ndarray
-    arm_angles: np.ndarray
-    fsr: np.ndarray
-    contacts: np.ndarray
-    body_length: float
-    meta: dict[str, Any] = field(default_factory=dict)
-
-    @property
-    def trouble(self) -> str:
-        """The SimTrouble message that ended the trial early, or '' if it ran to the end."""
-        return str(self.meta.get('trouble', ''))
 
 
 def scene_period(scene: Scene) -> float:
@@ -182,24 +158,6 @@ def _progress_bar(total: int, enabled: bool) -> Any:
     from tqdm import tqdm
 
     return tqdm(total=total, unit='tick', desc='sim', dynamic_ncols=True)
-
-
-def save_npz(recording: Recording, path: str | Path) -> Path:
-    """Write ``recording`` to a compressed npz file (format in the module docstring); return the path."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    np.savez_compressed(path, time=recording.time, poses=recording.poses, arm_angles=recording.arm_angles,
-                        fsr=recording.fsr, contacts=recording.contacts,
-                        body_length=np.float64(recording.body_length),
-                        fsr_faces=np.array(FSR_FACES), meta=np.array(json.dumps(recording.meta)))
-    return path
-
-
-def load_npz(path: str | Path) -> Recording:
-    """Read a recording written by ``save_npz``."""
-    with np.load(path, allow_pickle=False) as data:
-        return Recording(data['time'], data['poses'], data['arm_angles'], data['fsr'], data['contacts'],
-                         float(data['body_length']), json.loads(str(data['meta'])))
 
 
 def plot_trajectories(recording: Recording, path: str | Path) -> Path:

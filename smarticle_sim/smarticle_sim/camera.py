@@ -27,6 +27,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from smarticle_common.facts import SMALL, TAG_DICTIONARY, TAG_SIZE, RobotSpec
+from smarticle_common.poses import tag_corners
 
 from .errors import ConfigError
 
@@ -172,17 +173,8 @@ class OverheadCamera:
                           [float(v) for v in p.ravel()], 'plumb_bob')
 
     def tag_corners(self, poses: np.ndarray) -> np.ndarray:
-        """Arena corners (N, 4, 2) of the robots' tags (ArUco order: top-left, top-right, bottom-right,
-        bottom-left, seen from above with the tag's top toward the body normal)."""
-        poses = np.asarray(poses, dtype=float)
-        half = self.config.tag_size / 2.0
-        heading = poses[:, 2]
-        ex = np.stack([np.sin(heading), -np.cos(heading)], axis=1)     # body x axis
-        ey = np.stack([np.cos(heading), np.sin(heading)], axis=1)      # body normal
-        centre = poses[:, :2]
-        signs = np.array([[-1.0, 1.0], [1.0, 1.0], [1.0, -1.0], [-1.0, -1.0]])
-        return (centre[:, None, :] + half * (signs[None, :, 0:1] * ex[:, None, :]
-                                             + signs[None, :, 1:2] * ey[:, None, :]))
+        """Arena corners (N, 4, 2) of the robots' tags of this camera's tag size (``poses.tag_corners``)."""
+        return tag_corners(poses, self.config.tag_size)
 
     # ----------------------------------------------------------------- drawing
     def _draw_background(self) -> np.ndarray:

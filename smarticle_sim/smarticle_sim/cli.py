@@ -15,7 +15,9 @@ from pathlib import Path
 
 from smarticle_common.gait import GaitConfig, GaitError
 
-from .batch import plot_trajectories, run_trial, save_npz
+from smarticle_common.runs import save_npz
+
+from .batch import plot_trajectories, run_trial
 from .benchmark import benchmark, format_table
 from .errors import SimError
 from .scenes import Scene, build_scene

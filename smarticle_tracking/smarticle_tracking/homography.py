@@ -94,7 +94,7 @@ def calibrate(pixel_corners: FloatArray, ids: NDArray[np.int64], targets: Mappin
     """Fit a Calibration from detected tags (corners (M, 4, 2), ids (M,)) at known poses ``targets``."""
     import cv2
 
-    from .tracker import tag_corners
+    from smarticle_common.poses import tag_corners
 
     ids_list = [int(t) for t in np.asarray(ids).ravel()]
     used = [m for m, t in enumerate(ids_list) if t in targets and ids_list.count(t) == 1]

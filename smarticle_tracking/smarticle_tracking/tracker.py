@@ -22,10 +22,11 @@ from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
-
-from .homography import Calibration
-from .errors import FrameEncodingError, FrameSizeError, TrackerConfigError, TrackerInputError
 from smarticle_common.facts import TAG_DICTIONARY, TAG_SIZE
+from smarticle_common.poses import poses_from_corners
+
+from .errors import FrameEncodingError, FrameSizeError, TrackerConfigError, TrackerInputError
+from .homography import Calibration
 
 FloatArray = NDArray[np.float64]
 
@@ -160,31 +161,6 @@ class TagDetector:
             win = max(2, int(round(1.5 / min(scale, 1.0))))
             pts = cv2.cornerSubPix(image, pts, (win, win), (-1, -1), self._criteria)
         return Detections(pts.reshape(-1, 4, 2).astype(float), ids.ravel().astype(np.int64))
-
-
-def tag_corners(poses: FloatArray, tag_size: float) -> FloatArray:
-    """Arena corners (N, 4, 2) of tags on robots at ``poses`` (N, 3), in ArUco order (TL, TR, BR, BL)."""
-    poses = np.asarray(poses, dtype=float).reshape(-1, 3)
-    half = tag_size / 2.0
-    heading = poses[:, 2]
-    ex = np.stack([np.sin(heading), -np.cos(heading)], axis=1)     # body x axis = tag right
-    ey = np.stack([np.cos(heading), np.sin(heading)], axis=1)      # body normal = tag up
-    signs = np.array([[-1.0, 1.0], [1.0, 1.0], [1.0, -1.0], [-1.0, -1.0]])
-    return (poses[:, None, :2] + half * (signs[None, :, 0:1] * ex[:, None, :]
-                                         + signs[None, :, 1:2] * ey[:, None, :]))
-
-
-def poses_from_corners(corners: FloatArray) -> FloatArray:
-    """Planar poses (M, 3) from arena tag corners (M, 4, 2): centre = mean, heading from the edges."""
-    c = np.asarray(corners, dtype=float).reshape(-1, 4, 2)
-    tl, tr, br, bl = c[:, 0], c[:, 1], c[:, 2], c[:, 3]
-    up = (tl - bl) + (tr - br)
-    right = (tr - tl) + (br - bl)
-    normal_from_right = np.stack([-right[:, 1], right[:, 0]], axis=1)
-    n = (up / np.linalg.norm(up, axis=1, keepdims=True)
-         + normal_from_right / np.linalg.norm(normal_from_right, axis=1, keepdims=True))
-    heading = np.arctan2(n[:, 1], n[:, 0])
-    return np.column_stack([c.mean(axis=1), heading])
 
 
 def detection_scale(config: TrackerConfig, calibration: Calibration) -> float:

@@ -9,9 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 from smarticle_common.topics import FSR_FACES
-from smarticle_sim.batch import Recording, save_npz
+from smarticle_common.runs import Recording, save_npz
 
-from smarticle_feedback import calibration
+from smarticle_feedback import impact_window
 from smarticle_feedback.experiments import C2_START, Condition, c2_start, run_pair_trial, summarize
 
 
@@ -65,16 +65,16 @@ def test_calibration_suggests_a_window_from_collision_forces(tmp_path: Path) -> 
     contacts = np.zeros((200, 2, 2), dtype=bool)
     contacts[:100, 0, 1] = contacts[:100, 1, 0] = True
     path = save_npz(make_recording(forces, contacts), tmp_path / 'run.npz')
-    suggestion = calibration.calibrate_recording(path, low=0.0, high=100.0)
+    suggestion = impact_window.calibrate_recording(path, low=0.0, high=100.0)
     assert suggestion.faces[1].count == 200 and suggestion.faces[2].count == 0
     assert 1.0 <= suggestion.f_min < 1.05 and 2.95 < suggestion.f_max <= 3.0
     png = tmp_path / 'window.png'
-    assert calibration.main([str(path), '--png', str(png)]) == 0
+    assert impact_window.main([str(path), '--png', str(png)]) == 0
     assert png.stat().st_size > 1000
 
 
 def test_calibration_refuses_a_run_without_fsr(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     empty = make_recording(np.zeros((5, 2, 4)), np.zeros((5, 2, 2), dtype=bool), fsr_recorded=False)
     path = save_npz(empty, tmp_path / 'nofsr.npz')
-    assert calibration.main([str(path)]) == 2
+    assert impact_window.main([str(path)]) == 2
     assert 'smarticle-sim run ... --fsr' in capsys.readouterr().err

@@ -10,7 +10,8 @@ import pytest
 from smarticle_common.gait import GaitConfig
 from smarticle_common.topics import FSR_FACES
 
-from smarticle_sim.batch import load_npz, run_trial, save_npz
+from smarticle_common.runs import load_npz, save_npz
+from smarticle_sim.batch import run_trial
 from smarticle_sim.cli import main
 from smarticle_sim.scenes import dense_scene
 from smarticle_sim.settings import SimConfig

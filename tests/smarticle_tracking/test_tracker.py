@@ -15,8 +15,8 @@ from smarticle_tracking.homography_cli import main as calibrate_main
 from smarticle_bringup.sim_camera import sim_calibration
 from smarticle_tracking.errors import CalibrationError, TrackerConfigError, TrackerInputError
 from smarticle_tracking.parameters import SIM_CALIBRATION
-from smarticle_tracking.tracker import (TagDetector, TagTracker, TrackerConfig, image_from_buffer,
-                                        poses_from_corners, tag_corners)
+from smarticle_common.poses import poses_from_corners, tag_corners
+from smarticle_tracking.tracker import TagDetector, TagTracker, TrackerConfig, image_from_buffer
 
 
 def heading_error(a: np.ndarray, b: np.ndarray) -> np.ndarray:
