@@ -1,16 +1,16 @@
-"""Shared fixtures: an isolated DDS domain per test run and real node processes."""
+"""Shared fixtures: an isolated DDS domain per test run and real node processes (helpers: tests/helpers/).
+
+Tiers: a test that uses the ``nodes`` or ``ros_node`` fixture starts real nodes or talks over DDS and is
+marked ``integration`` automatically; ``./test.sh -m "not integration"`` runs the fast tier."""
 
 from __future__ import annotations
 
 import os
-import time
 from pathlib import Path
 from typing import Callable, Iterator
 
 import pytest
-from smarticle_common.launching import DomainReservation, ProcessGroup, executable
-
-__all__ = ['executable', 'spin_until']
+from smarticle_common.launching import DomainReservation, ProcessGroup
 
 ROOT = Path(__file__).resolve().parents[1]
 DOMAIN = pytest.StashKey[DomainReservation]()
@@ -61,13 +61,8 @@ def ros_node() -> Iterator[Callable[[str], object]]:
         rclpy.try_shutdown()
 
 
-def spin_until(node: object, predicate: Callable[[], bool], timeout: float) -> bool:
-    """Spin ``node`` until ``predicate()`` is true or ``timeout`` seconds pass; return the predicate."""
-    import rclpy
-
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        rclpy.spin_once(node, timeout_sec=0.05)
-    return predicate()
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Mark every test that starts real nodes or joins DDS (``nodes``, ``ros_node``) as integration."""
+    for item in items:
+        if {'nodes', 'ros_node'} & set(getattr(item, 'fixturenames', ())):
+            item.add_marker(pytest.mark.integration)

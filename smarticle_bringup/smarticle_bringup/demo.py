@@ -165,8 +165,8 @@ def main(argv: list[str] | None = None) -> int:
     import matplotlib
 
     matplotlib.use('Agg')
-    from smarticle_tracking.glider_plots import plot_glider_analysis
-    from smarticle_tracking.gliders import GliderConfig, analyse_gliders, format_glider_table, glider_table
+    from smarticle_tracking.gliders import GliderConfig
+    from smarticle_tracking.report import glider_report
 
     args = build_parser().parse_args(argv)
     if args.robots < 1 or args.periods <= 0:
@@ -180,21 +180,19 @@ def main(argv: list[str] | None = None) -> int:
                                   {'source': 'demo: /smarticles/poses over DDS', 'periods': args.periods,
                                    'seed': args.seed, 'scene': args.scene}), args.out / 'poses.npz')
     config = GliderConfig(min_periods=args.min_periods)
-    analysis = analyse_gliders(times, poses, config)
-    rows = glider_table(analysis.gliders, config)
+    report = glider_report(times, poses, config, args.out / 'gliders.png')
     print(f'\n[demo] {args.robots} robots, {args.scene} start, alpha_max {args.alpha_max:g} deg, '
           f'{times[-1] / GAIT_PERIOD:.0f} periods received over DDS, {rtf:.1f}x real time')
     print(f'[demo] gliders (pairs bound >= {args.min_periods} periods; bound = centre distance under '
           f'{config.r_bind / config.body_length:.1f} BL in every period, judged from poses alone, as a tracker '
           'would: neighbours that rest close together count too, see dist [W]):')
-    print(format_glider_table(rows) if rows else '  none found in this run')
+    print(report.table)
     moved = np.linalg.norm(poses[-1, :, :2] - poses[0, :, :2], axis=1) / config.width
     print('[demo] net displacement of each robot (W): ' + ', '.join(f'{k}: {d:.2f}' for k, d in enumerate(moved)))
     plot_trajectories(times, poses, config.width, args.out / 'trajectories.png')
     written = [args.out / 'trajectories.png', args.out / 'poses.npz']
-    if analysis.gliders:
-        plot_glider_analysis(analysis, args.out / 'gliders.png')
-        written.append(args.out / 'gliders.png')
+    if report.figure is not None:
+        written.append(report.figure)
     print('[demo] wrote ' + ', '.join(str(p) for p in written))
     return 0
 

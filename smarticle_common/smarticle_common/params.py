@@ -1,8 +1,8 @@
-"""Declared ROS parameters from one table: names, defaults, descriptions and ranges, read into a dict.
+"""Parameter tables: names, defaults, descriptions and ranges of a node's parameters, declared once.
 
-A node lists its parameters once as ``ParamSpec`` rows; ``declare_and_read`` declares them with their
-descriptions and returns the values, and ``defaults_yaml`` renders the shipped YAML file of defaults
-(a test checks each package's ``config/*.yaml`` against its table). Imports rclpy only when declaring.
+A node lists its parameters once as ``ParamSpec`` rows; ``smarticle_common.node.declare_and_read``
+declares them on the node and returns the values, and ``defaults_yaml`` renders the shipped YAML file of
+defaults (a test checks each package's ``config/*.yaml`` against its table). No rclpy here.
 """
 
 from __future__ import annotations
@@ -44,18 +44,6 @@ class ParamSpec:
         return value
 
 
-def declare_and_read(node: Any, specs: tuple[ParamSpec, ...]) -> dict[str, Any]:
-    """Declare ``specs`` on an rclpy node and return their checked values by name."""
-    from rcl_interfaces.msg import ParameterDescriptor
-
-    values: dict[str, Any] = {}
-    for spec in specs:
-        descriptor = ParameterDescriptor(description=spec.description)
-        param = node.declare_parameter(spec.name, spec.default, descriptor)
-        values[spec.name] = spec.check(param.value, f'node {node.get_name()} parameter')
-    return values
-
-
 def defaults_yaml(node_name: str, specs: tuple[ParamSpec, ...]) -> str:
     """Render the ROS parameters file of the defaults of ``specs`` for node ``node_name``."""
     params = {spec.name: spec.default for spec in specs}
@@ -70,36 +58,3 @@ def read_defaults_yaml(path: str, node_name: str) -> dict[str, Any]:
         if isinstance(data, dict) and key in data:
             return dict(data[key]['ros__parameters'])
     raise ParameterError(f'{path}: no section {node_name!r} with ros__parameters')
-
-
-def spin_node(factory: Any, node_name: str, args: list[str] | None = None,
-              startup_errors: tuple[type[BaseException], ...] = (ParameterError,)) -> None:
-    """Run a node the Jazzy way: init, spin until Ctrl-C or shutdown, destroy, try_shutdown.
-
-    An error of ``startup_errors`` raised while the node is being built (a bad parameter or file) is
-    logged as fatal and ends the process with exit code 2; the same error later propagates. An rclpy
-    error raised by ``spin`` because a signal shut the context down under it (Jazzy's executor races,
-    e.g. "failed to initialize wait set") is a clean exit, like KeyboardInterrupt.
-    """
-    import rclpy
-    from rclpy.executors import ExternalShutdownException
-
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = factory()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except startup_errors as err:
-        if node is not None:
-            raise
-        rclpy.logging.get_logger(node_name).fatal(f'cannot start: {err}')
-        raise SystemExit(2) from err
-    except RuntimeError:    # rclpy's RCLError and pybind11 errors of a context that a signal just ended
-        if node is None or rclpy.ok():
-            raise
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()

@@ -15,7 +15,8 @@ from rclpy.time import Time
 from smarticle_common import topics
 from smarticle_common.facts import GAIT_PERIOD, SERVO_SPEED
 from smarticle_common.gait import GaitCommand, GaitConfig, GaitError, SquareGait
-from smarticle_common.params import ParamSpec, ParameterError, declare_and_read, spin_node
+from smarticle_common.node import declare_and_read, run_node
+from smarticle_common.params import ParamSpec, ParameterError
 
 NODE_NAME = 'gait'
 
@@ -143,7 +144,7 @@ class GaitNode(Node):
 
 def main(args: list[str] | None = None) -> None:
     """Entry point of `ros2 run smarticle_driver gait`."""
-    spin_node(GaitNode, NODE_NAME, args, startup_errors=(ParameterError,))
+    run_node(GaitNode, NODE_NAME, args, startup_errors=(ParameterError,))
 
 if __name__ == '__main__':
     main()

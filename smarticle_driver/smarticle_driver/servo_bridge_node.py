@@ -23,7 +23,8 @@ from rclpy.node import Node
 
 from smarticle_common import topics
 from smarticle_driver.errors import DriverError
-from smarticle_common.params import ParameterError, declare_and_read, spin_node
+from smarticle_common.node import DiagnosticsPublisher, declare_and_read, run_node
+from smarticle_common.params import ParameterError
 from smarticle_driver.servo_bridge_core import NODE_NAME, PARAMS, BridgeConfig, ServoBridgeCore, StepResult
 
 #: Seconds between two log lines of the same kind of warning.
@@ -43,15 +44,11 @@ class ServoBridgeNode(Node):
         self._warned_lock = threading.Lock()
         k = self.config.robot_id
         self._joint_state = topics.message_class('sensor_msgs/msg/JointState')
-        diag = topics.spec_of('diagnostics')
-        self._diag_array = topics.message_class(diag.type)
-        self._diag_status = topics.message_class('diagnostic_msgs/msg/DiagnosticStatus')
-        self._key_value = topics.message_class('diagnostic_msgs/msg/KeyValue')
         states, fsr, commands = (topics.spec_of(key) for key in ('joint_states', 'fsr', 'joint_commands'))
         self.joint_pub = self.create_publisher(self._joint_state, states.resolve(k),
                                                topics.qos_profile(states.qos))
         self.fsr_pub = self.create_publisher(self._joint_state, fsr.resolve(k), topics.qos_profile(fsr.qos))
-        self.diag_pub = self.create_publisher(self._diag_array, diag.resolve(), topics.qos_profile(diag.qos))
+        self.diagnostics = DiagnosticsPublisher(self, f'smarticle_{k}/{NODE_NAME}', self.config.port)
         self.create_subscription(self._joint_state, commands.resolve(k), self.on_command,
                                  topics.qos_profile(commands.qos))
         self.diag_timer = self.create_timer(self.config.diagnostics_period, self.on_diagnostics)
@@ -104,16 +101,7 @@ class ServoBridgeNode(Node):
         """Poll the board's error flags and publish the bridge's status on /diagnostics."""
         self._warn(self.core.poll_board_errors())
         status = self.core.status(time.monotonic())
-        item = self._diag_status()
-        item.level = bytes((int(status.level),))
-        item.name = f'smarticle_{self.config.robot_id}/{NODE_NAME}'
-        item.message = status.message
-        item.hardware_id = self.config.port
-        item.values = [self._key_value(key=key, value=value) for key, value in status.values.items()]
-        array = self._diag_array()
-        array.header.stamp = self.get_clock().now().to_msg()
-        array.status = [item]
-        self._send(self.diag_pub, array)
+        self.diagnostics.publish(int(status.level), status.message, status.values)
 
     def destroy_node(self) -> None:
         """Stop the step thread, close the serial port, then destroy the node."""
@@ -164,7 +152,7 @@ class ServoBridgeNode(Node):
 
 def main(args: list[str] | None = None) -> None:
     """Entry point of `ros2 run smarticle_driver servo_bridge`."""
-    spin_node(ServoBridgeNode, NODE_NAME, args, startup_errors=(ParameterError, DriverError))
+    run_node(ServoBridgeNode, NODE_NAME, args, startup_errors=(ParameterError, DriverError))
 
 if __name__ == '__main__':
     main()

@@ -11,11 +11,11 @@ from __future__ import annotations
 from typing import Any
 
 import rclpy
-from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from rclpy.node import Node
 from rclpy.time import Time
 from smarticle_common import topics
-from smarticle_common.params import ParameterError, declare_and_read, spin_node
+from smarticle_common.node import OK, WARN, DiagnosticsPublisher, declare_and_read, run_node
+from smarticle_common.params import ParameterError
 
 from .controller import ImpactController, check_sample
 from .errors import FsrSampleError
@@ -37,10 +37,10 @@ class FeedbackNode(Node):
         self.controller = ImpactController(config_from_values(values))
         self.bad: dict[str, int] = {}
         self.last_problem = ''
-        self.Header, self.Diagnostics = _msg('halt'), _msg('diagnostics')
-        qos = {key: topics.qos_profile(topics.spec_of(key).qos) for key in ('fsr', 'halt', 'start', 'diagnostics')}
+        self.Header = _msg('halt')
+        qos = {key: topics.qos_profile(topics.spec_of(key).qos) for key in ('fsr', 'halt', 'start')}
         self.halt_pub = self.create_publisher(self.Header, topics.topic('halt', self.robot_id), qos['halt'])
-        self.diag_pub = self.create_publisher(self.Diagnostics, topics.topic('diagnostics'), qos['diagnostics'])
+        self.diagnostics = DiagnosticsPublisher(self, f'smarticle_{self.robot_id}/{NODE_NAME}')
         self.create_subscription(_msg('fsr'), topics.topic('fsr', self.robot_id), self.on_fsr, qos['fsr'])
         self.create_subscription(self.Header, topics.topic('start'), self.on_start, qos['start'])
         self.create_timer(values['diagnostics_period'], self.publish_diagnostics, clock=rclpy.clock.Clock())
@@ -87,20 +87,13 @@ class FeedbackNode(Node):
                   **{k: v for k, v in self.bad.items() if k != 'bad_values'},
                   'start_time': 'unknown' if self.controller.start_time is None else
                   f'{self.controller.start_time:.3f}', 'last_problem': self.last_problem}
-        level = 1 if self.bad else 0
-        status = DiagnosticStatus(level=bytes([level]), name=f'smarticle_{self.robot_id}/{NODE_NAME}',
-                                  message='bad FSR messages' if self.bad else 'ok', hardware_id='')
-        status.values = [KeyValue(key=k, value=str(v)) for k, v in values.items()]
-        array = self.Diagnostics()
-        array.header.stamp = self.get_clock().now().to_msg()
-        array.status = [status]
-        self.diag_pub.publish(array)
+        self.diagnostics.publish(WARN if self.bad else OK, 'bad FSR messages' if self.bad else 'ok', values)
         self.bad = {}
 
 
 def main(args: list[str] | None = None) -> None:
     """Entry point of `ros2 run smarticle_feedback feedback`."""
-    spin_node(FeedbackNode, NODE_NAME, args, startup_errors=(ParameterError,))
+    run_node(FeedbackNode, NODE_NAME, args, startup_errors=(ParameterError,))
 
 if __name__ == '__main__':
     main()

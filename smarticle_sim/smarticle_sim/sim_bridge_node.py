@@ -16,14 +16,14 @@ import time
 from typing import Any
 
 import rclpy
-from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from rclpy.event_handler import PublisherEventCallbacks
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.time import Time
 from smarticle_common import topics
 from smarticle_common.messages import pose_message
-from smarticle_common.params import ParameterError, declare_and_read
+from smarticle_common.node import DiagnosticsPublisher, declare_and_read, run_node
+from smarticle_common.params import ParameterError
 
 from .bridge import NODE_NAME, PARAMS, BridgeSettings, SimBridgeCore
 from .errors import SimError, SimTrouble
@@ -50,11 +50,10 @@ class SimBridgeNode(Node):
         n = self.core.n_robots
         self.JointState, self.Clock = _msg('joint_states'), _msg('clock')
         self.PoseArray, self.PoseStamped = _msg('poses'), _msg('pose')
-        self.Diagnostics = _msg('diagnostics')
         qos = {key: topics.qos_profile(topics.spec_of(key).qos) for key in topics.BY_KEY}
         self.clock_pub = self.create_publisher(self.Clock, topics.topic('clock'), qos['clock'])
         self.poses_pub = self.create_publisher(self.PoseArray, topics.topic('poses'), qos['poses'])
-        self.diag_pub = self.create_publisher(self.Diagnostics, topics.topic('diagnostics'), qos['diagnostics'])
+        self.diagnostics = DiagnosticsPublisher(self, NODE_NAME, 'pybullet')
         # per-robot outputs without QoS-event handlers: each one would add two waitables to every
         # executor wait, which dominates the lock-step loop with many robots
         quiet = PublisherEventCallbacks(use_default_callbacks=False)
@@ -175,15 +174,13 @@ class SimBridgeNode(Node):
 
     def publish_diagnostics(self, level: int, message: str, rtf: float) -> None:
         """Publish the bridge's status and counters on /diagnostics."""
-        array = self.Diagnostics()
-        array.header.stamp = self.get_clock().now().to_msg()
-        status = DiagnosticStatus(level=bytes([level]), name=f'{NODE_NAME}', message=message,
-                                  hardware_id='pybullet')
-        values = {'sim_time': f'{self.core.time:.3f}', 'real_time_factor': f'{rtf:.2f}', **{
-            k: str(v) for k, v in self.counts.items()}}
-        status.values = [KeyValue(key=k, value=v) for k, v in values.items()]
-        array.status = [status]
-        self.diag_pub.publish(array)
+        self.diagnostics.publish(level, message, {'sim_time': f'{self.core.time:.3f}',
+                                                  'real_time_factor': f'{rtf:.2f}', **self.counts})
+
+    def destroy_node(self) -> None:
+        """Release the physics client, then the node."""
+        self.core.close()
+        super().destroy_node()
 
     # ------------------------------------------------------------------ loop
     def run(self, executor: SingleThreadedExecutor) -> int:
@@ -259,26 +256,7 @@ class SimBridgeNode(Node):
 
 def main(args: list[str] | None = None) -> None:
     """Entry point of `ros2 run smarticle_sim sim_bridge`."""
-    rclpy.init(args=args)
-    node = None
-    code = 0
-    try:
-        node = SimBridgeNode()
-        executor = SingleThreadedExecutor()
-        executor.add_node(node)
-        code = node.run(executor)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except ParameterError as err:
-        rclpy.logging.get_logger(NODE_NAME).fatal(str(err))
-        code = 2
-    finally:
-        if node is not None:
-            node.core.close()
-            node.destroy_node()
-        rclpy.try_shutdown()
-    if code:
-        raise SystemExit(code)
+    run_node(SimBridgeNode, NODE_NAME, args)
 
 
 if __name__ == '__main__':

@@ -22,7 +22,8 @@ from rclpy.node import Node
 from rclpy.time import Time
 from smarticle_common import topics
 from smarticle_common.messages import planar_poses
-from smarticle_common.params import ParameterError, declare_and_read, spin_node
+from smarticle_common.node import OK, DiagnosticsPublisher, declare_and_read, run_node
+from smarticle_common.params import ParameterError
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
@@ -86,7 +87,7 @@ class GliderMonitorNode(Node):
         qos = {key: topics.qos_profile(topics.spec_of(key).qos) for key in topics.BY_KEY}
         self.gliders_pub = self.create_publisher(DiagnosticArray, topics.topic('gliders'), qos['gliders'])
         self.markers_pub = self.create_publisher(MarkerArray, topics.topic('markers'), qos['markers'])
-        self.diag_pub = self.create_publisher(DiagnosticArray, topics.topic('diagnostics'), qos['diagnostics'])
+        self.diagnostics = DiagnosticsPublisher(self, MONITOR_NODE)
         self.create_subscription(topics.message_class(topics.spec_of('poses').type), topics.topic('poses'),
                                  self.on_poses, qos['poses'])
         self.arms = np.full((0, 2), np.nan)
@@ -153,17 +154,12 @@ class GliderMonitorNode(Node):
 
     def publish_diagnostics(self) -> None:
         """Publish the node's status and counters on /diagnostics."""
-        status = DiagnosticStatus(level=DiagnosticStatus.OK, name=MONITOR_NODE,
-                                  message=f'{len(self.bound)} bound pair(s)', hardware_id='')
-        status.values = [KeyValue(key=k, value=str(v)) for k, v in self.counts.items()]
-        array = DiagnosticArray(status=[status])
-        array.header.stamp = self.get_clock().now().to_msg()
-        self.diag_pub.publish(array)
+        self.diagnostics.publish(OK, f'{len(self.bound)} bound pair(s)', self.counts)
 
 
 def main(args: list[str] | None = None) -> None:
     """Entry point of `ros2 run smarticle_tracking glider_monitor`."""
-    spin_node(GliderMonitorNode, MONITOR_NODE, args, startup_errors=(ParameterError,))
+    run_node(GliderMonitorNode, MONITOR_NODE, args, startup_errors=(ParameterError,))
 
 if __name__ == '__main__':
     main()

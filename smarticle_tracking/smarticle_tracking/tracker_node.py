@@ -15,13 +15,13 @@ from typing import Any
 
 import numpy as np
 import rclpy
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseArray, PoseStamped
 from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.node import Node
 from smarticle_common import topics
 from smarticle_common.messages import pose_message
-from smarticle_common.params import ParameterError, declare_and_read, spin_node
+from smarticle_common.node import ERROR, OK, DiagnosticsPublisher, declare_and_read, run_node
+from smarticle_common.params import ParameterError
 
 from .errors import CalibrationError, FrameEncodingError, FrameSizeError, TrackerError
 from .parameters import TRACKER_NODE, TRACKER_PARAMS, tracker_calibration, tracker_config
@@ -51,7 +51,7 @@ class TrackerNode(Node):
         self.poses_pub = self.create_publisher(PoseArray, topics.topic('poses'), qos['poses'])
         self.pose_pubs = [self.create_publisher(PoseStamped, topics.topic('pose', k), qos['pose'],
                                                 event_callbacks=quiet) for k in range(n)]
-        self.diag_pub = self.create_publisher(DiagnosticArray, topics.topic('diagnostics'), qos['diagnostics'])
+        self.diagnostics = DiagnosticsPublisher(self, TRACKER_NODE, 'overhead_camera')
         image_type = topics.message_class(topics.spec_of('image_raw').type)
         info_type = topics.message_class(topics.spec_of('camera_info').type)
         image_qos = qos['image_raw'] if values['image_reliable'] else topics.qos_profile(topics.Qos.SENSOR)
@@ -129,20 +129,15 @@ class TrackerNode(Node):
     def publish_diagnostics(self) -> None:
         """Publish status and counters on /diagnostics."""
         frames = self.counts['frames']
-        level = DiagnosticStatus.ERROR if self.tracker is None else DiagnosticStatus.OK
         message = self.calibration_problem or f'{frames} frames'
         rate = self.seen_total / max(frames * self.config.n_robots, 1)
-        status = DiagnosticStatus(level=level, name=TRACKER_NODE, message=message, hardware_id='overhead_camera')
-        values = {**{k: str(v) for k, v in self.counts.items()}, 'detection_rate': f'{rate:.4f}'}
-        status.values = [KeyValue(key=k, value=v) for k, v in values.items()]
-        array = DiagnosticArray(status=[status])
-        array.header.stamp = self.get_clock().now().to_msg()
-        self.diag_pub.publish(array)
+        self.diagnostics.publish(ERROR if self.tracker is None else OK, message,
+                                 {**self.counts, 'detection_rate': f'{rate:.4f}'})
 
 
 def main(args: list[str] | None = None) -> None:
     """Entry point of `ros2 run smarticle_tracking tracker`."""
-    spin_node(TrackerNode, TRACKER_NODE, args, startup_errors=(ParameterError,))
+    run_node(TrackerNode, TRACKER_NODE, args, startup_errors=(ParameterError,))
 
 if __name__ == '__main__':
     main()

@@ -36,8 +36,8 @@ from smarticle_common.launching import DomainReservation, ProcessGroup, isolated
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))   # the repository root: tests.* helpers
 from tests.benchmarks._common import ROOT, markdown_table, out_path, write_csv
-from tests.smarticle_driver.fake_board_helpers import running_emulator
-from tests.smarticle_feedback.hardware_rig import HardwareRig
+from tests.helpers.fake_board import running_emulator
+from tests.helpers.hardware_rig import HardwareRig
 
 PERIOD = 0.8
 WORKING_TREE = 'working tree'

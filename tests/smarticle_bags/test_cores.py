@@ -17,8 +17,6 @@ from smarticle_bags.info import format_info
 from smarticle_bags.playback import PlaybackClock, PlaybackOptions, window
 from smarticle_bags.reader import BagReader
 from smarticle_bags.selection import TopicFilter, parse_remaps
-from smarticle_bags.settings import PLAYER_NODE, PLAYER_PARAMS, RECORDER_NODE, RECORDER_PARAMS
-from smarticle_common.params import read_defaults_yaml
 
 from .helpers import JOINTS, POSES, T0, make_bag
 
@@ -93,12 +91,6 @@ def test_export_and_info(tmp_path: Path) -> None:
     assert 'Messages:          20' in text and 'Storage id:        mcap' in text
     assert re.search(r'Topic: /smarticles/poses +\| Type: geometry_msgs/msg/PoseArray +\| Count: 10 \| '
                      r'Serialization Format: cdr', text)
-
-
-def test_shipped_configs_match_tables() -> None:
-    tables = ((RECORDER_NODE, RECORDER_PARAMS, 'recorder'), (PLAYER_NODE, PLAYER_PARAMS, 'player'))
-    for node, specs, name in tables:
-        assert read_defaults_yaml(str(CONFIG / f'{name}.yaml'), node) == {s.name: s.default for s in specs}
 
 
 def test_cli_errors_and_info(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -11,16 +11,9 @@ import pytest
 
 from smarticle_common import topics
 from smarticle_common.gait import GaitConfig, SquareGait
-from smarticle_driver.gait_node import NODE_NAME, PARAMS
-from smarticle_common.params import read_defaults_yaml
-from tests.conftest import executable, spin_until
+from tests.helpers.ros import executable, spin_until
 
 ROOT = Path(__file__).resolve().parents[2]
-
-
-def test_shipped_yaml_equals_declared_defaults() -> None:
-    shipped = read_defaults_yaml(str(ROOT / 'smarticle_driver' / 'config' / 'gait.yaml'), NODE_NAME)
-    assert shipped == {spec.name: spec.default for spec in PARAMS}
 
 
 @pytest.mark.integration

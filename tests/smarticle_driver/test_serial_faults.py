@@ -7,7 +7,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from tests.smarticle_driver.fake_board_helpers import open_board, running_emulator, wait_until
+from tests.helpers.fake_board import open_board, running_emulator, wait_until
 
 from smarticle_driver import maestro
 from smarticle_driver.emulator import EmulatorError, MaestroEmulator

@@ -19,8 +19,8 @@ from smarticle_common import topics
 from smarticle_driver.board_calibration import load_fsr_calibration, load_servo_calibration
 from smarticle_driver.emulator import MaestroEmulator, TargetRecord
 from smarticle_common.gait import CORNER_SIGNS
-from tests.conftest import spin_until
-from tests.smarticle_driver.fake_board_helpers import open_board, running_emulator, wait_until
+from tests.helpers.ros import spin_until
+from tests.helpers.fake_board import open_board, running_emulator, wait_until
 
 ROOT = Path(__file__).resolve().parents[2]
 CONFIG = ROOT / 'smarticle_driver' / 'config'

@@ -5,13 +5,12 @@ from __future__ import annotations
 import math
 
 import pytest
-from smarticle_common.params import ParameterError, read_defaults_yaml
+from smarticle_common.params import ParameterError
 from smarticle_common.topics import FSR_FACES
 
 from smarticle_feedback.controller import FeedbackConfig, ImpactController, ImpactWindow, check_sample
 from smarticle_feedback.errors import FeedbackConfigError, FsrSampleError
-from smarticle_feedback.parameters import NODE_NAME, PARAMS, config_from_values, default_values
-from tests.conftest import ROOT
+from smarticle_feedback.parameters import config_from_values, default_values
 
 QUIET = (0.0, 0.0, 0.0, 0.0)
 
@@ -125,9 +124,7 @@ def test_nonsense_settings_are_refused(kwargs: dict, message: str) -> None:
         FeedbackConfig.uniform(**kwargs)
 
 
-def test_parameters_build_the_config_and_the_yaml_ships_the_defaults() -> None:
-    shipped = read_defaults_yaml(str(ROOT / 'smarticle_feedback' / 'config' / 'feedback.yaml'), NODE_NAME)
-    assert shipped == {spec.name: spec.default for spec in PARAMS}
+def test_parameters_build_the_config() -> None:
     config = config_from_values(default_values(arm1_back_enabled=False, debounce_samples=2))
     assert 'arm1_back' not in config.enabled_faces and config.debounce == 2
     with pytest.raises(ParameterError, match='node feedback: impact window f_min'):

@@ -7,10 +7,10 @@ import time
 from pathlib import Path
 from typing import Any
 
-from tests.conftest import spin_until
-from tests.smarticle_driver.fake_board_helpers import running_emulator
+from tests.helpers.ros import spin_until
+from tests.helpers.fake_board import running_emulator
 
-from .hardware_rig import HardwareRig
+from tests.helpers.hardware_rig import HardwareRig
 
 PERIOD = 0.8
 

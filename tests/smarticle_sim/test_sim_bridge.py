@@ -9,11 +9,10 @@ import numpy as np
 import pytest
 from smarticle_common import topics
 from smarticle_common.gait import GaitConfig, SquareGait, open_loop_angles
-from smarticle_common.params import read_defaults_yaml
-from smarticle_sim.bridge import NODE_NAME, PARAMS, BridgeSettings, SimBridgeCore
+from smarticle_sim.bridge import BridgeSettings, SimBridgeCore
 from smarticle_sim.errors import ConfigError
 
-from tests.conftest import spin_until
+from tests.helpers.ros import spin_until
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -26,11 +25,6 @@ def _keep_all_sensor() -> object:
 
 
 KEEP_ALL_SENSOR = _keep_all_sensor()
-
-
-def test_shipped_yaml_equals_declared_defaults() -> None:
-    shipped = read_defaults_yaml(str(ROOT / 'smarticle_sim' / 'config' / 'sim_bridge.yaml'), NODE_NAME)
-    assert shipped == {spec.name: spec.default for spec in PARAMS}
 
 
 @pytest.mark.parametrize('changes, field', [

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from glider_scenes import FRAMES_PER_PERIOD, PERIOD, pair_scene, periods
+from tests.helpers.glider_scenes import FRAMES_PER_PERIOD, PERIOD, pair_scene, periods
 
 from smarticle_tracking.errors import GliderConfigError, GliderInputError
 from smarticle_tracking.glider_monitor import GliderMonitor

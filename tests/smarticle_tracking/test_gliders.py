@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from glider_scenes import FRAMES_PER_PERIOD, PERIOD, R_BOUND, R_FREE, pair_scene, periods
+from tests.helpers.glider_scenes import FRAMES_PER_PERIOD, PERIOD, R_BOUND, R_FREE, pair_scene, periods
 
 from smarticle_tracking.errors import GliderConfigError, GliderInputError
 from smarticle_tracking.glider_plots import draw_pair_coordinates, plot_glider_analysis

@@ -7,19 +7,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from smarticle_common.params import read_defaults_yaml
 from smarticle_tracking.glider_monitor import GliderMonitor
 from smarticle_tracking.gliders import GliderClass, GliderConfig
 from smarticle_tracking.markers import CLASS_COLOURS, ROBOT_COLOUR, RobotDims, render_png, robot_outline, scene_markers
-from smarticle_tracking.parameters import (CONFIG_DIR, MONITOR_NODE, MONITOR_PARAMS, TRACKER_NODE, TRACKER_PARAMS,
+from smarticle_tracking.parameters import (MONITOR_PARAMS, TRACKER_PARAMS,
                                          SettingsError, monitor_settings, parse_tag_ids, tracker_config)
 
-from glider_scenes import pair_scene, periods
-
-
-@pytest.mark.parametrize('node, specs', [(TRACKER_NODE, TRACKER_PARAMS), (MONITOR_NODE, MONITOR_PARAMS)])
-def test_shipped_yaml_equals_declared_defaults(node: str, specs: tuple) -> None:  # type: ignore[type-arg]
-    assert read_defaults_yaml(str(CONFIG_DIR / f'{node}.yaml'), node) == {s.name: s.default for s in specs}
+from tests.helpers.glider_scenes import pair_scene, periods
 
 
 def test_defaults_build_valid_configs() -> None:

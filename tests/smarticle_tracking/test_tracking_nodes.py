@@ -14,8 +14,8 @@ from smarticle_sim.camera import CameraConfig, OverheadCamera
 from smarticle_bringup.sim_camera import sim_calibration
 from smarticle_tracking.homography import save_calibration
 
-from glider_scenes import pair_scene, periods
-from tests.conftest import spin_until
+from tests.helpers.glider_scenes import pair_scene, periods
+from tests.helpers.ros import spin_until
 
 pytestmark = pytest.mark.integration
 

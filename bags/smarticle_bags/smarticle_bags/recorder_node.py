@@ -17,7 +17,8 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from smarticle_common import topics as contract
-from smarticle_common.params import ParameterError, declare_and_read
+from smarticle_common.node import declare_and_read
+from smarticle_common.params import ParameterError
 
 from . import qos
 from .errors import BagError

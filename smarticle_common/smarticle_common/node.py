@@ -1,0 +1,98 @@
+"""The node helper every node uses: parameters declared from a table, /diagnostics, and the Jazzy main.
+
+The one module of ``smarticle_common`` that imports rclpy. A node is built the ros2/demos way (one class,
+everything created in the constructor) and started with ``run_node``::
+
+    def main(args: list[str] | None = None) -> None:
+        run_node(GaitNode, NODE_NAME, args)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+
+from . import topics
+from .params import ParameterError, ParamSpec
+
+#: Diagnostic levels (diagnostic_msgs/DiagnosticStatus).
+OK, WARN, ERROR = 0, 1, 2
+
+
+def declare_and_read(node: Any, specs: tuple[ParamSpec, ...]) -> dict[str, Any]:
+    """Declare ``specs`` on an rclpy node and return their checked values by name (ParameterError if bad)."""
+    values: dict[str, Any] = {}
+    for spec in specs:
+        descriptor = ParameterDescriptor(description=spec.description)
+        param = node.declare_parameter(spec.name, spec.default, descriptor)
+        values[spec.name] = spec.check(param.value, f'node {node.get_name()} parameter')
+    return values
+
+
+class DiagnosticsPublisher:
+    """A node's status on /diagnostics: one DiagnosticStatus (name, hardware id) with key/value counters."""
+
+    def __init__(self, node: Node, name: str, hardware_id: str = '') -> None:
+        spec = topics.spec_of('diagnostics')
+        self.node, self.name, self.hardware_id = node, name, hardware_id
+        self.publisher = node.create_publisher(DiagnosticArray, spec.resolve(), topics.qos_profile(spec.qos))
+
+    def publish(self, level: int, message: str, values: Mapping[str, object] = {}) -> None:
+        """Publish one status now; ``values`` become KeyValue pairs (as text)."""
+        status = DiagnosticStatus(level=bytes([level]), name=self.name, message=message,
+                                  hardware_id=self.hardware_id)
+        status.values = [KeyValue(key=str(k), value=str(v)) for k, v in values.items()]
+        array = DiagnosticArray(status=[status])
+        array.header.stamp = self.node.get_clock().now().to_msg()
+        try:
+            self.publisher.publish(array)
+        except RuntimeError:        # rclpy's RCLError: the context ended under us (Ctrl-C, SIGTERM)
+            if self.node.context.ok():
+                raise
+
+
+def run_node(factory: Callable[[], Node], node_name: str, args: list[str] | None = None,
+             startup_errors: tuple[type[BaseException], ...] = (ParameterError,)) -> None:
+    """Run a node the Jazzy way: init, spin until Ctrl-C or shutdown, destroy, try_shutdown.
+
+    A node with a ``run(executor) -> int`` method drives its own loop (the sim bridge's lock-step) and
+    its return value is the exit code; any other node is spun. An error of ``startup_errors`` raised
+    while the node is being built (a bad parameter or file) is logged as fatal and ends the process with
+    exit code 2; the same error later propagates. An rclpy error raised because a signal shut the
+    context down under the executor (Jazzy's races, e.g. "failed to initialize wait set") is a clean
+    exit, like KeyboardInterrupt.
+    """
+    rclpy.init(args=args)
+    node = None
+    code = 0
+    try:
+        node = factory()
+        run = getattr(node, 'run', None)
+        if callable(run):
+            executor = SingleThreadedExecutor()
+            executor.add_node(node)
+            code = int(run(executor))
+        else:
+            rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except startup_errors as err:
+        if node is not None:
+            raise
+        rclpy.logging.get_logger(node_name).fatal(f'cannot start: {err}')
+        code = 2
+    except RuntimeError:    # rclpy's RCLError and pybind11 errors of a context that a signal just ended
+        if node is None or rclpy.ok():
+            raise
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    if code:
+        raise SystemExit(code)
