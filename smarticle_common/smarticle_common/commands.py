@@ -3,7 +3,8 @@
 A command is JointState-like (names, positions, velocities). ``check_command`` returns the usable
 targets and speed limits per known joint plus a warning and a counter for everything it dropped or
 changed: unknown joint names are ignored, non-finite targets dropped, out-of-range targets clamped,
-bad speed limits replaced by the fallback speed.
+bad speed limits (NaN, infinite, zero or negative) replaced by the fallback speed, and speed limits above
+the servo's top speed (``max_speed``) clamped to it: a command can never ask for an unlimited servo.
 """
 
 from __future__ import annotations
@@ -29,7 +30,8 @@ class CheckedCommand:
 
 
 def check_command(names: Sequence[str], positions: Sequence[float], velocities: Sequence[float],
-                  limits: dict[str, tuple[float, float]], fallback_speed: float) -> CheckedCommand:
+                  limits: dict[str, tuple[float, float]], fallback_speed: float,
+                  max_speed: float | None = None) -> CheckedCommand:
     """Check one JointState-like command against the joints' angle ``limits`` (rad)."""
     out = CheckedCommand()
     if len(positions) != len(names):
@@ -65,6 +67,10 @@ def check_command(names: Sequence[str], positions: Sequence[float], velocities: 
             out.flag('bad_speeds', f'joint command: {name} speed limit {speed} is not a positive number; '
                                    f'using {fallback_speed:.3g} rad/s')
             speed = fallback_speed
+        if max_speed is not None and speed > max_speed:
+            out.flag('clamped_speeds', f'joint command: {name} speed limit {speed:.3g} rad/s is above the '
+                                       f"servo's {max_speed:.3g} rad/s; clamped to it")
+            speed = max_speed
         out.targets[name] = target
         out.speeds[name] = speed
     return out

@@ -58,6 +58,8 @@ PARAMS: tuple[ParamSpec, ...] = (
               'for this many seconds', 0.02, 60.0),
     ParamSpec('default_speed', SERVO_SPEED, 'speed limit (rad/s) for commands without a valid '
               'velocity', 0.01, 100.0),
+    ParamSpec('max_speed', SERVO_SPEED, "the servo's top speed (rad/s): higher speed limits are clamped to it",
+              0.01, 100.0),
     ParamSpec('servo_calibration_file', '', f'servo calibration YAML; empty = {SERVO_CALIBRATION_FILE} in '
               "the package's config folder"),
     ParamSpec('fsr_calibration_file', '', f'FSR calibration YAML; empty = {FSR_CALIBRATION_FILE} in the '
@@ -85,6 +87,7 @@ class BridgeConfig:
     fsr_rate_hz: float = 100.0
     watchdog_timeout: float = 0.5
     default_speed: float = SERVO_SPEED
+    max_speed: float = SERVO_SPEED
     servo_calibration_file: str = ''
     fsr_calibration_file: str = ''
     reply_timeout: float = 0.02
@@ -104,6 +107,9 @@ class BridgeConfig:
                                     f'reconnect_max ({self.reconnect_max} s)')
         if not self.port:
             raise BridgeConfigError('port must name a serial device, got an empty string')
+        if self.default_speed > self.max_speed:
+            raise BridgeConfigError(f'default_speed ({self.default_speed} rad/s) must not exceed max_speed '
+                                    f'({self.max_speed} rad/s)')
 
     @classmethod
     def from_values(cls, values: dict[str, Any]) -> BridgeConfig:
@@ -113,7 +119,7 @@ class BridgeConfig:
                    baud=values['baud'], servo_channels=(values['arm1_channel'], values['arm2_channel']),
                    fsr_channels=(fsr[0], fsr[1], fsr[2], fsr[3]),
                    fsr_rate_hz=values['fsr_rate_hz'], watchdog_timeout=values['watchdog_timeout'],
-                   default_speed=values['default_speed'],
+                   default_speed=values['default_speed'], max_speed=values['max_speed'],
                    servo_calibration_file=values['servo_calibration_file'],
                    fsr_calibration_file=values['fsr_calibration_file'], reply_timeout=values['reply_timeout'],
                    reconnect_initial=values['reconnect_initial'], reconnect_max=values['reconnect_max'],
@@ -137,6 +143,7 @@ class Counters:
     nonfinite_targets: int = 0
     clamped_targets: int = 0
     bad_speeds: int = 0
+    clamped_speeds: int = 0
     unknown_joints: int = 0
     short_reply: int = 0
     garbage: int = 0
@@ -235,7 +242,8 @@ class ServoBridgeCore:
 
         Waits for at most the one board transaction that may be in progress in another thread.
         """
-        checked = check_command(names, positions, velocities, self.limits, self.config.default_speed)
+        checked = check_command(names, positions, velocities, self.limits, self.config.default_speed,
+                                self.config.max_speed)
         with self.lock:
             self.counters.add('commands')
             for counter, count in checked.counts.items():

@@ -208,7 +208,8 @@ class SimBridgeCore:
     def apply_command(self, robot: int, names: list[str], positions: list[float],
                       velocities: list[float], stamp_ns: int) -> CheckedCommand:
         """Check a joint command for ``robot`` and hand its usable part to the physics."""
-        checked = check_command(names, positions, velocities, self.limits, self.settings.sim.robot.servo_speed)
+        servo = self.settings.sim.robot.servo_speed
+        checked = check_command(names, positions, velocities, self.limits, servo, servo)
         if checked.targets:
             for j, name in enumerate(topics.JOINT_NAMES):
                 if name in checked.targets:

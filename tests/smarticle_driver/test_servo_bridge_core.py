@@ -16,6 +16,7 @@ from smarticle_driver.emulator import MaestroEmulator
 from smarticle_driver.errors import BridgeConfigError
 from smarticle_driver.maestro import MaestroBoard
 from smarticle_common.params import read_defaults_yaml
+from smarticle_driver import maestro
 from smarticle_driver.servo_bridge_core import (NODE_NAME, BridgeConfig, Level, ServoBridgeCore,
                                                 StepResult, check_command)
 from tests.helpers.fake_board import open_board, running_emulator, wait_until
@@ -72,12 +73,15 @@ def test_valid_commands_pass_and_a_missing_velocity_uses_the_fallback_speed() ->
     (['arm1', 'arm1'], [0.1, 0.2], [], 'rejected_commands', 'repeated', {}),
     (['arm1'], [0.1], [math.nan], 'bad_speeds', 'using 3 rad/s', {'arm1': 0.1}),
     (['arm1'], [0.1], [-2.0], 'bad_speeds', 'not a positive number', {'arm1': 0.1}),
+    (['arm1'], [0.1], [math.inf], 'bad_speeds', 'not a positive number', {'arm1': 0.1}),
+    (['arm1'], [0.1], [1e308], 'clamped_speeds', 'clamped to it', {'arm1': 0.1}),
 ])
 def test_bad_commands_are_rejected_or_clamped_with_a_warning(names: list[str], positions: list[float],
                                                              velocities: list[float], counter: str, text: str,
                                                              accepted: dict[str, float]) -> None:
-    out = check_command(names, positions, velocities, LIMITS, 3.0)
+    out = check_command(names, positions, velocities, LIMITS, 3.0, max_speed=10.0)
     assert out.counts == {counter: 1}
+    assert all(0.0 < v <= 10.0 for v in out.speeds.values())
     assert len(out.warnings) == 1 and text in out.warnings[0], out.warnings
     assert out.targets == pytest.approx(accepted)
 
@@ -158,6 +162,23 @@ def test_the_watchdog_holds_the_arms_where_they_are_and_a_new_command_releases_t
     core.handle_command(['arm1', 'arm2'], [1.0, 0.0], [1.0, 1.0], time.monotonic())
     assert not core.holding
     assert wait_until(lambda: emulator.targets()[-1].pulse_us == 2100.0, 1.0)
+
+
+@pytest.mark.parametrize('velocity', [1e308, math.inf, 1e6])
+def test_a_huge_speed_limit_reaches_the_board_as_the_servo_top_speed_never_unlimited(
+        core: ServoBridgeCore, emulator: MaestroEmulator, velocity: float) -> None:
+    """Set Speed 0 means *unlimited* to a Maestro: no command may produce it."""
+    core.step(time.monotonic())                                   # opens the port
+    core.handle_command(['arm1', 'arm2'], [0.5, -0.5], [velocity, velocity], time.monotonic())
+    assert wait_until(lambda: emulator.speed(0) != 0 and emulator.speed(1) != 0, 1.0), \
+        (emulator.speed(0), emulator.speed(1))
+    top = core.joints[0].cal.rate_to_pulse_rate(core.config.max_speed)
+    fallback = core.joints[0].cal.rate_to_pulse_rate(core.config.default_speed)
+    for channel in (0, 1):
+        assert maestro.units_to_speed(emulator.speed(channel)) == pytest.approx(
+            top if math.isfinite(velocity) else fallback, rel=0.02)
+    counter = 'clamped_speeds' if math.isfinite(velocity) else 'bad_speeds'
+    assert getattr(core.counters, counter) == 2
 
 
 def test_fsr_voltages_become_newtons_through_the_calibration(core: ServoBridgeCore,
