@@ -10,7 +10,9 @@ from pathlib import Path
 from typing import Callable, Iterator
 
 import pytest
-from smarticle_common.launching import DomainReservation, ProcessGroup
+from smarticle_common.launching import DomainReservation
+
+from tests.helpers.ros import NodeProcesses
 
 ROOT = Path(__file__).resolve().parents[1]
 DOMAIN = pytest.StashKey[DomainReservation]()
@@ -24,10 +26,6 @@ def pytest_configure(config: pytest.Config) -> None:
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     os.environ.setdefault('RMW_IMPLEMENTATION', 'rmw_fastrtps_cpp')
     os.environ['PYTHONUNBUFFERED'] = '1'
-
-
-class NodeProcesses(ProcessGroup):
-    """The project's ProcessGroup with this test run's environment."""
 
 
 @pytest.fixture

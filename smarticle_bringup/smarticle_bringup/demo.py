@@ -102,7 +102,9 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
         shutil.rmtree(bag)  # the previous demo run's bag
     try:
         with ProcessGroup(log_dir, env) as group:
-            common = ['-p', f'alpha_max_deg:={args.alpha_max}', '-p', f'period:={period}']
+            # every node takes the start time as a parameter, so the start cannot race the first /clock
+            common = ['-p', f'alpha_max_deg:={args.alpha_max}', '-p', f'period:={period}',
+                      '-p', f'start_at:={START_AT}']
             scene = {'robots': args.robots, 'scene': args.scene, 'seed': args.seed, 'phase_jitter': args.phase_jitter}
             scene_args = [arg for key, value in scene.items() for arg in ('-p', f'{key}:={value}')]
             robots = BridgeSettings.defaults(alpha_max_deg=args.alpha_max, **scene).scene().robots  # their phases
@@ -113,14 +115,13 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
                             '-p', 'use_sim_time:=true', '-p', f'phase:={phase!r}', *common)
                 if args.feedback:
                     group.start('feedback', '--ros-args', '-p', f'robot_id:={k}', '-p', 'use_sim_time:=true',
-                                '-p', f'period:={period}', '-p', f'phase:={phase!r}')
+                                '-p', f'period:={period}', '-p', f'phase:={phase!r}', '-p', f'start_at:={START_AT}')
             group.start('glider_monitor', '--ros-args', '-p', 'use_sim_time:=true', '-p', f't0:={START_AT}',
                         '-p', f'min_periods:={args.min_periods}', '-p', 'show_arms:=false')
             recording = start_recording(group, bag, [topics.topic(key) for key in RECORDED])
             recording.wait_subscribed(timeout=30.0)
             bridge = group.start('sim_bridge', '--ros-args', *scene_args,
-                                 '-p', f'duration:={duration}', '-p', f'start_at:={START_AT}',
-                                 '-p', 'wait_for_subscribers:=3', *common)
+                                 '-p', f'duration:={duration}', '-p', 'wait_for_subscribers:=3', *common)
             feedback = f'{args.robots} feedback nodes + ' if args.feedback else ''
             print(f'[demo] sim bridge + {args.robots} gait nodes + {feedback}glider monitor + recorder started (domain '
                   f'{env["ROS_DOMAIN_ID"]}, logs in {log_dir}); simulating {args.periods:g} periods = '

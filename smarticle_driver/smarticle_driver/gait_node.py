@@ -29,6 +29,10 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec('tick_rate', 100.0, 'how often the gait is evaluated, Hz', 1.0, 1000.0),
     ParamSpec('heartbeat', 0.2, 'republish the unchanged command after this many seconds', 0.005, 10.0),
     ParamSpec('autostart', False, 'start at the first tick without waiting for /smarticles/start'),
+    ParamSpec('start_at', -1.0, 'start the gait at this time (s, the node clock or /clock in lock-step) '
+              'without waiting for /smarticles/start; a start message with this stamp changes nothing '
+              '(negative = wait for /smarticles/start). Lock-step runs set it so that the start cannot race '
+              'the first /clock messages', -1.0, 1e7),
     ParamSpec('lockstep', False, 'publish one command stamped with every /clock message (for the '
               "simulation's lock-step mode) instead of on change plus heartbeat"),
 )
@@ -53,6 +57,9 @@ class GaitNode(Node):
         self.gait = SquareGait(config_from_params(values))
         self.heartbeat = Time(seconds=values['heartbeat']).nanoseconds
         self.autostart: bool = values['autostart']
+        self.start_at: float = values['start_at']
+        if self.start_at >= 0.0:
+            self.gait.start(self.start_at)
         self._last_targets: tuple[float, float] | None = None
         self._last_sent_ns = 0
         self._latest_ns = 0
@@ -73,7 +80,8 @@ class GaitNode(Node):
                                      topics.qos_profile(clock.qos))
         else:
             self.timer = self.create_timer(1.0 / values['tick_rate'], self.on_tick)
-        waiting = 'starting at once' if self.autostart else f'waiting for {start.resolve()}'
+        waiting = ('starting at once' if self.autostart else f'starting at t = {self.start_at:g} s'
+                   if self.start_at >= 0.0 else f'waiting for {start.resolve()}')
         self.get_logger().info(
             f'robot {self.robot_id}: alpha_max {values["alpha_max_deg"]:g} deg, '
             f'period {values["period"]:g} s, phase {values["phase"]:g}; {waiting}')
@@ -99,6 +107,8 @@ class GaitNode(Node):
     def on_start(self, msg: Any) -> None:
         """Start (or restart) the gait at the stamped time."""
         stamp = msg.stamp.sec + msg.stamp.nanosec * 1e-9
+        if self.start_at >= 0.0 and abs(stamp - self.start_at) < 1e-9:
+            return  # the start this node was given already (a restart would forget a halt)
         self.gait.start(stamp if stamp > 0.0 else self.now_seconds())
         self.get_logger().info(f'gait start at t = {self.gait.start_time:.3f} s')
         self.on_tick()

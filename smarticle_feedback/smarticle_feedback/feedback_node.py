@@ -35,6 +35,9 @@ class FeedbackNode(Node):
         values = declare_and_read(self, PARAMS)
         self.robot_id: int = values['robot_id']
         self.controller = ImpactController(config_from_values(values))
+        self.start_at: float = values['start_at']
+        if self.start_at >= 0.0:
+            self.controller.start(self.start_at)
         self.bad: dict[str, int] = {}
         self.last_problem = ''
         self.Header = _msg('halt')
@@ -53,6 +56,8 @@ class FeedbackNode(Node):
     def on_start(self, msg: Any) -> None:
         """Take the gait start time (a zero stamp means now, as for the gait node)."""
         stamp = Time.from_msg(msg.stamp).nanoseconds * 1e-9
+        if self.start_at >= 0.0 and abs(stamp - self.start_at) < 1e-9:
+            return  # the start this node was given already (a restart would forget its halts)
         self.controller.start(stamp if stamp > 0.0 else self.get_clock().now().nanoseconds * 1e-9)
 
     def on_fsr(self, msg: Any) -> None:

@@ -45,6 +45,8 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec('phase', 0.0, "gait phase of this robot (fraction of a period): use the gait node's phase",
               0.0, 0.999999),
     ParamSpec('diagnostics_period', 1.0, 'seconds (wall) between /diagnostics messages', 0.05, 60.0),
+    ParamSpec('start_at', -1.0, "the gait's start time (s): use the gait node's start_at; negative = take "
+              'it from /smarticles/start', -1.0, 1e7),
 )
 
 

@@ -59,9 +59,10 @@ def ros_trial(seed: int, periods: float, workdir: Path, probe: object) -> dict[s
     with ProcessGroup(workdir, dict(os.environ)) as procs:
         for k in range(2):
             procs.start('gait', '--ros-args', '-r', f'__node:=gait_{k}', '-p', f'robot_id:={k}', '-p', 'lockstep:=true',
-                        '-p', 'use_sim_time:=true', '-p', 'alpha_max_deg:=90.0', '-p', f'phase:={phases[k]}')
+                        '-p', 'use_sim_time:=true', '-p', 'alpha_max_deg:=90.0', '-p', f'phase:={phases[k]}',
+                        '-p', f'start_at:={START_AT}')
             procs.start('feedback', '--ros-args', '-r', f'__node:=feedback_{k}', '-p', f'robot_id:={k}',
-                        '-p', 'use_sim_time:=true', '-p', f'phase:={phases[k]}')
+                        '-p', 'use_sim_time:=true', '-p', f'phase:={phases[k]}', '-p', f'start_at:={START_AT}')
         bridge = procs.start('sim_bridge', '--ros-args', '-p', 'preset:=feedback', '-p', 'scene:=pair',
                              '-p', f'pair_r:={r}', '-p', f'pair_theta_deg:={theta}', '-p', f'pair_phi_deg:={phi}',
                              '-p', f'pair_phase_0:={phases[0]}', '-p', f'pair_phase_1:={phases[1]}',

@@ -62,7 +62,8 @@ def ros_lockstep(robots: int, seconds: float, publish_period: float, log_dir: Pa
     """Wall time of the stepping part of a lock-step run, as reported by the sim bridge's own log."""
     with ProcessGroup(log_dir, isolated_ros_env()) as group:
         for k in range(robots):
-            group.start('gait', '--ros-args', '-p', f'robot_id:={k}', '-p', 'lockstep:=true')
+            group.start('gait', '--ros-args', '-p', f'robot_id:={k}', '-p', 'lockstep:=true',
+                        '-p', f'start_at:={START_AT}')
         bridge = group.start('sim_bridge', '--ros-args', '-p', f'robots:={robots}', '-p', f'duration:={seconds}',
                              '-p', f'publish_period:={publish_period}', '-p', f'start_at:={START_AT}')
         bridge.wait(timeout=1200)

@@ -6,11 +6,15 @@ import time
 from pathlib import Path
 from typing import Callable
 
-from smarticle_common.launching import executable
+from smarticle_common.launching import ProcessGroup, executable
 
-__all__ = ['ROOT', 'executable', 'spin_until']
+__all__ = ['ROOT', 'NodeProcesses', 'executable', 'spin_until']
 
 ROOT = Path(__file__).resolve().parents[2]
+
+
+class NodeProcesses(ProcessGroup):
+    """The project's ProcessGroup with this test run's environment (the ``nodes`` fixture)."""
 
 
 def spin_until(node: object, predicate: Callable[[], bool], timeout: float) -> bool:

@@ -14,7 +14,7 @@ from smarticle_bags.reader import BagReader
 from smarticle_bags.reindex import reindex
 from smarticle_bags.writer import BagWriter, WriterOptions
 
-from ..conftest import NodeProcesses, spin_until
+from tests.helpers.ros import NodeProcesses, spin_until
 from .helpers import POSES, T0, pose_array
 
 pytestmark = pytest.mark.integration

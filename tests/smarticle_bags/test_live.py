@@ -20,7 +20,7 @@ from rosbags.typesys import Stores, get_typestore
 from smarticle_bags.reader import BagReader
 from smarticle_bags.recording import start_recording
 
-from ..conftest import NodeProcesses, spin_until
+from tests.helpers.ros import NodeProcesses, spin_until
 
 pytestmark = pytest.mark.integration
 

@@ -17,7 +17,7 @@ from rosbags.typesys import Stores, get_typestore
 from smarticle_bags import arrays
 from smarticle_bags.reader import BagReader
 
-from ..conftest import ROOT, executable
+from tests.helpers.ros import ROOT, executable
 
 SAMPLES = ROOT / 'bags' / 'samples'
 BAGS = sorted(p for p in SAMPLES.iterdir() if (p / 'metadata.yaml').is_file()) if SAMPLES.is_dir() else []

@@ -109,7 +109,7 @@ def test_gait_nodes_drive_the_sim_in_lockstep_deterministically(nodes, ros_node)
                 KEEP_ALL_SENSOR)
         for k in range(2):
             nodes.start('gait', '--ros-args', '-p', f'robot_id:={k}', '-p', 'lockstep:=true',
-                        '-p', 'use_sim_time:=true')
+                        '-p', 'use_sim_time:=true', '-p', 'start_at:=0.5')
         bridge = nodes.start('sim_bridge', '--ros-args', '-p', 'scene:=pair', '-p', 'pair_r:=2.5',
                              '-p', f'duration:={duration}', '-p', 'start_at:=0.5',
                              '-p', f'wait_for_subscribers:={run + 1}')   # earlier probes still listen
