@@ -15,7 +15,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = {'smarticle_driver': 'smarticle_driver', 'smarticle_sim': 'smarticle_sim',
             'smarticle_feedback': 'smarticle_feedback', 'smarticle_tracking': 'smarticle_tracking',
-            'smarticle_bags': 'bags/smarticle_bags'}
+            'smarticle_bags': 'bags/smarticle_bags', 'smarticle_experiments': 'smarticle_experiments'}
 IGNORE = shutil.ignore_patterns('__pycache__', '*.egg-info', '*.pyc', 'build', 'install', 'log')
 
 
