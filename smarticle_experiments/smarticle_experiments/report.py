@@ -416,7 +416,8 @@ def section_accuracy(ctx: Context) -> list[str]:
             ax.loglog([w for w, _ in sel], [e for _, e in sel], 'o-', label=f'{it} iterations')
     ax.set_xlabel('wall s per simulated s')
     ax.set_ylabel('position error after 10 periods (BL)')
-    ax.legend(fontsize=7)
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=7)
     ctx.save(fig, 'accuracy')
     return [f'Reference: {ref_t.params["rate_hz"]:g} Hz, {ref_t.params["solver_iterations"]} iterations.', '',
             *out, '', '![accuracy](accuracy.png)']
@@ -469,11 +470,13 @@ def write_report(spec: ExperimentSpec, trials: list[Trial], store: ResultStore, 
             f'({len(spec.points())} grid points x {len(spec.seeds)} seeds), {spec.base.get("periods", "?")} periods; '
             f'code {dict(code)}.', '',
             '## Paper against sim', '',
-            '| quantity | paper | sim [95 % interval] | interval | n trials | seeds | paper inside | note |',
+            '| quantity | paper | sim [95 % interval] | interval | n trials / values | seeds | paper inside | note |',
             '| --- | --- | --- | --- | ---: | --- | --- | --- |']
     for c in ctx.comparisons:
         method = c.sim.method if c.sim is not None else '-'
-        head.append(f'| {c.quantity} | {c.paper} | {c.sim_text} | {method} | {len(ok)} | {ctx.seeds_text(ok)} | '
+        n_values = f' / {c.sim.n}' if c.sim is not None else ''
+        head.append(f'| {c.quantity} | {c.paper} | {c.sim_text} | {method} | {len(ok)}{n_values} | '
+                    f'{ctx.seeds_text(ok)} | '
                     f'{_yes_no(c.inside)} | {c.note} |')
     text = '\n'.join([*head, '', *body, *trouble_lines(ctx), ''])
     path = folder / 'report.md'

@@ -5,7 +5,8 @@
   ``CensoredData`` (right-censored = still bound at the end); the median and its 95 % interval are read
   off the survival curve and its pointwise 95 % band (log-log) where they cross 0.5.
 * Means over trajectories (beta, V_com, r, distance, drift): ``scipy.stats.bootstrap`` (BCa, 9999
-  resamples, a fixed seed so a report is reproducible; percentile when BCa is degenerate).
+  resamples, a fixed seed so a report is reproducible; percentile when BCa is degenerate; no interval
+  for fewer than 3 values).
 """
 
 from __future__ import annotations
@@ -20,6 +21,8 @@ import numpy as np
 CONFIDENCE = 0.95
 BOOTSTRAP_RESAMPLES = 9999
 BOOTSTRAP_SEED = 0
+#: Fewest values a bootstrap interval is given for (below: the mean without an interval).
+MIN_BOOTSTRAP = 3
 
 
 @dataclass(frozen=True)
@@ -67,9 +70,10 @@ def bootstrap_mean(values: Sequence[float]) -> Estimate:
     if arr.size == 0:
         return Estimate(math.nan, math.nan, math.nan, 0, 'bootstrap')
     mean = float(arr.mean())
-    if arr.size < 2 or np.all(arr == arr[0]):
-        return Estimate(mean, mean if arr.size > 1 else math.nan, mean if arr.size > 1 else math.nan,
-                        int(arr.size), 'bootstrap')
+    if arr.size < MIN_BOOTSTRAP:
+        return Estimate(mean, math.nan, math.nan, int(arr.size), 'bootstrap')
+    if np.all(arr == arr[0]):
+        return Estimate(mean, mean, mean, int(arr.size), 'bootstrap')
     for method in ('BCa', 'percentile'):
         with warnings.catch_warnings():
             warnings.simplefilter('ignore')

@@ -32,9 +32,14 @@ from .errors import StoreError
 from .trials import code_versions
 
 DEFAULT_ROOT = Path('out/experiments')
-#: Paths (relative to the repository root) whose last commit is the code version of a trial.
-CODE_PATHS: tuple[str, ...] = ('smarticle_experiments', 'smarticle_sim', 'smarticle_tracking',
-                               'smarticle_feedback', 'smarticle_driver')
+#: Paths (relative to the repository root) whose last commit is the code version of a trial: the code a
+#: trial runs (this package's trial and engine modules and the cores it imports), not the report or
+#: statistics, so a change of a figure does not invalidate stored trials.
+CODE_PATHS: tuple[str, ...] = ('smarticle_experiments/smarticle_experiments/trials.py',
+                               'smarticle_experiments/smarticle_experiments/engine.py',
+                               'smarticle_experiments/setup.py',
+                               'smarticle_sim/smarticle_sim', 'smarticle_tracking/smarticle_tracking',
+                               'smarticle_feedback/smarticle_feedback', 'smarticle_driver/smarticle_driver')
 
 
 @lru_cache(maxsize=1)
