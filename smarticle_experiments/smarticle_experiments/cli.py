@@ -120,8 +120,14 @@ def cmd_run(args: argparse.Namespace) -> int:
     spec = resolve(args)
     code = code_version()
     trials = spec.trials(code)
+    store = ResultStore(args.out / spec.store)
+    if not {t.key for t in trials} - store.done(args.retry_failed):
+        summary = store.write_summary(store.records(t.key for t in trials))
+        print(f'{spec.name}: {len(trials)} trials: {len(trials)} already stored, 0 done now; summary {summary}')
+        if args.report:
+            print(f'report: {write_report(spec, trials, store, code)}')
+        return 0
     with dask_client(args.scheduler, args.workers) as client:   # connect before writing anything
-        store = ResultStore(args.out / spec.store)
         store.folder.mkdir(parents=True, exist_ok=True)
         (store.folder / f'spec-{spec.name}.yaml').write_text(yaml.safe_dump(
             {'name': spec.name, 'kind': spec.kind, 'source': spec.source, 'base': dict(spec.base),
