@@ -211,6 +211,13 @@ def spec_from_mapping(data: Any, source: str = '') -> ExperimentSpec:
         known = resolve_kind(kind)
     except SpecError as exc:
         raise SpecError(f'{name}: {exc}') from None
+    if known is None:
+        from .trials import trial_function
+
+        try:
+            trial_function(kind)   # a user's module:function must import here (and on the workers)
+        except SpecError as exc:
+            raise SpecError(f'{name}: {exc}') from None
     base: dict[str, Any] = dict(known.defaults) if known else {}
     for group in ('params', 'analysis'):
         values = _mapping(name, group, data.get(group))
