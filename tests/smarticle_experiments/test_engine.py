@@ -143,3 +143,17 @@ def test_a_killed_client_resumes_where_it_stopped(tmp_path: Path) -> None:
     assert len(after) == 8 and all(r['status'] == 'ok' for r in after.values())
     assert {k: (trials_dir / f'{k}.json').stat().st_mtime_ns for k in before} == mtimes   # not run again
     assert len(pd.read_parquet(out / 'slow' / 'summary.parquet')) == 8
+
+
+def test_the_same_trials_go_to_an_existing_scheduler(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from distributed import LocalCluster
+
+    spec = write_spec(tmp_path / 'tiny.yaml', {**TINY, 'report': []})
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        assert main(['run', spec, '--out', str(tmp_path / 'remote'), '--scheduler', cluster.scheduler_address,
+                     '--no-progress']) == 0
+    assert '0 already stored, 2 done now' in capsys.readouterr().out
+    local = tmp_path / 'local'
+    assert main(['run', spec, '--out', str(local), '--workers', '1', '--no-progress']) == 0
+    pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / 'remote' / 'tiny' / 'summary.parquet'),
+                                  pd.read_parquet(local / 'tiny' / 'summary.parquet'))
