@@ -36,7 +36,7 @@ def execute_trial(kind: str, params: Mapping[str, Any], seed: int, key: str, poi
                   code: Mapping[str, str]) -> dict[str, Any]:
     """Run one trial on a worker and return its full store record (a trial that raises: status 'failed')."""
     started = datetime.now(timezone.utc).isoformat(timespec='seconds')
-    wall0, cpu0 = time.perf_counter(), time.process_time()
+    unix0, wall0, cpu0 = time.time(), time.perf_counter(), time.process_time()
     record: dict[str, Any] = {'key': key, 'kind': kind, 'params': dict(params), 'seed': seed, 'point': dict(point),
                               'code': dict(code), 'started': started,
                               'worker': {'host': socket.gethostname(), 'pid': os.getpid(), **code_versions()}}
@@ -48,6 +48,7 @@ def execute_trial(kind: str, params: Mapping[str, Any], seed: int, key: str, poi
                       traceback=traceback.format_exc())
     record['wall_s'] = time.perf_counter() - wall0
     record['cpu_s'] = time.process_time() - cpu0
+    record['start_unix'], record['end_unix'] = unix0, unix0 + record['wall_s']
     return record
 
 
@@ -119,8 +120,8 @@ class Progress:
         self.done += 1
         self.failed += int(failed)
         if self.bar is not None:
-            self.bar.update(1)
             self._post()
+            self.bar.update(1)
 
     def close(self) -> None:
         """Close the bar."""
