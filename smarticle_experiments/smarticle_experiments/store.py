@@ -33,11 +33,9 @@ from .trials import code_versions
 
 DEFAULT_ROOT = Path('out/experiments')
 #: Paths (relative to the repository root) whose last commit is the code version of a trial: the code a
-#: trial runs (this package's trial and engine modules and the cores it imports), not the report or
+#: trial runs (this package's trial module and the cores it imports), not the engine, report or
 #: statistics, so a change of a figure does not invalidate stored trials.
 CODE_PATHS: tuple[str, ...] = ('smarticle_experiments/smarticle_experiments/trials.py',
-                               'smarticle_experiments/smarticle_experiments/engine.py',
-                               'smarticle_experiments/setup.py',
                                'smarticle_sim/smarticle_sim', 'smarticle_tracking/smarticle_tracking',
                                'smarticle_feedback/smarticle_feedback', 'smarticle_driver/smarticle_driver')
 
