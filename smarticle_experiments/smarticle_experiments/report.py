@@ -94,6 +94,12 @@ def figure(width: float = 7.0, height: float = 5.0) -> Any:
     return Figure(figsize=(width, height), dpi=100)
 
 
+def legend(ax: Any, size: int = 7) -> None:
+    """A legend, if anything on ``ax`` has a label."""
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=size)
+
+
 def _paper(ctx: Context, name: str, default: Any = None) -> Any:
     """A paper value from the spec's ``paper`` mapping."""
     return ctx.spec.paper.get(name, default)
@@ -160,7 +166,7 @@ def section_trajectories(ctx: Context) -> list[str]:
     ax.set_xlabel('x (BL)')
     ax.set_ylabel('y (BL)')
     ax.set_title(f'seed {trial.seed}: one sample per period (o start; bold: longest glider)', fontsize=9)
-    ax.legend(fontsize=7)
+    legend(ax, 7)
     ctx.save(fig, 'trajectories')
     return [f'Trajectories of seed {trial.seed} (Fig. 1c):', '', '![trajectories](trajectories.png)']
 
@@ -191,7 +197,7 @@ def section_configurations(ctx: Context) -> list[str]:
     ax2.set_xlabel('phi (deg)')
     for ax in (ax1, ax2):
         ax.set_ylabel('gliders')
-        ax.legend(fontsize=7)
+        legend(ax, 7)
     fig.suptitle(f'{n} gliders from {len(pairs)} trials (mean r, circular mean phi per glider)', fontsize=9)
     ctx.save(fig, 'configurations')
     return ['![r and phi histograms](configurations.png)']
@@ -239,7 +245,7 @@ def section_lifetimes(ctx: Context) -> list[str]:
     ax3.set_xlabel('lifetime (periods)')
     ax3.set_ylabel('survival (Kaplan-Meier, 95 % band)')
     for ax in (ax1, ax2, ax3):
-        ax.legend(fontsize=7)
+        legend(ax, 7)
     ctx.save(fig, 'lifetimes')
     return ['Lifetimes of gliders still bound at the end of a trial are right-censored (Kaplan-Meier).', '',
             *lines, '', '![lifetimes](lifetimes.png)']
@@ -329,7 +335,7 @@ def section_alpha_sweep(ctx: Context) -> list[str]:
         ax.set_ylabel(label)
     axm.set_xlabel('lag (periods)')
     axm.set_ylabel('ensemble MSD (W^2)')
-    axm.legend(fontsize=6)
+    legend(axm, 6)
     ctx.save(fig, 'alpha_sweep')
     return ['Per pair: its longest glider. beta per pair = fit of its own path (NaN when too short); '
             'ensemble beta = fit of the ensemble MSD <x^2> - <x>^2 over all pairs at that amplitude.', '',
@@ -359,7 +365,7 @@ def section_p6(ctx: Context) -> list[str]:
     ax1.set_ylabel('C2 lifetime (periods)')
     ax2.set_xlabel('lifetime (periods)')
     ax2.set_ylabel('survival (Kaplan-Meier)')
-    ax2.legend(fontsize=7)
+    legend(ax2, 7)
     ctx.save(fig, 'p6_lifetimes')
     fb = [m for (_, f), m in medians.items() if f]
     ol = [m for (_, f), m in medians.items() if not f]
@@ -416,8 +422,7 @@ def section_accuracy(ctx: Context) -> list[str]:
             ax.loglog([w for w, _ in sel], [e for _, e in sel], 'o-', label=f'{it} iterations')
     ax.set_xlabel('wall s per simulated s')
     ax.set_ylabel('position error after 10 periods (BL)')
-    if ax.get_legend_handles_labels()[0]:
-        ax.legend(fontsize=7)
+    legend(ax)
     ctx.save(fig, 'accuracy')
     return [f'Reference: {ref_t.params["rate_hz"]:g} Hz, {ref_t.params["solver_iterations"]} iterations.', '',
             *out, '', '![accuracy](accuracy.png)']
