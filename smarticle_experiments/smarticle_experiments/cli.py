@@ -96,6 +96,11 @@ def resolve(args: argparse.Namespace) -> ExperimentSpec:
     return spec
 
 
+def summary_name(spec: ExperimentSpec) -> str:
+    """``summary`` for the spec that owns its store, ``summary-<name>`` for one that shares another's."""
+    return 'summary' if spec.store == spec.name else f'summary-{spec.name}'
+
+
 def cmd_list(args: argparse.Namespace) -> int:
     """Print the shipped specs (and with -v the kinds)."""
     for name in builtin_names():
@@ -122,7 +127,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     trials = spec.trials(code)
     store = ResultStore(args.out / spec.store)
     if not {t.key for t in trials} - store.done(args.retry_failed):
-        summary = store.write_summary(store.records(t.key for t in trials))
+        summary = store.write_summary(store.records(t.key for t in trials), summary_name(spec))
         print(f'{spec.name}: {len(trials)} trials: {len(trials)} already stored, 0 done now; summary {summary}')
         if args.report:
             print(f'report: {write_report(spec, trials, store, code)}')
@@ -136,7 +141,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         sys.stderr.write(f'{spec.name}: {len(trials)} trials, store {store.folder}, {workers} workers\n')
         stats = run_trials(trials, store, client, code, retries=args.retries, retry_failed=args.retry_failed,
                            progress=not args.no_progress)
-    summary = store.write_summary(store.records(t.key for t in trials))
+    summary = store.write_summary(store.records(t.key for t in trials), summary_name(spec))
     print(f'{spec.name}: {stats.total} trials: {stats.skipped} already stored, {stats.ok} done now, '
           f'{stats.failed} failed, {stats.lost} lost by the engine ({stats.wall_s:.1f} s, {stats.workers} workers); '
           f'summary {summary}')

@@ -5,7 +5,9 @@ Layout of ``<root>/<store>/`` (default root ``out/experiments``)::
     trials/<key>.json     one per finished trial: key, kind, params, seed, status ('ok' or 'failed'),
                           result or traceback, wall time, worker, code version (package, commit,
                           pybullet, numpy) -- written atomically (temp file + os.replace)
-    summary.parquet       one row per trial file: key, kind, seed, grid values, status, scalar results
+    summary.parquet       one row per trial of the last run of the store's own spec: key, kind, seed, grid
+                          values, status, scalar results (summary-<name>.parquet for another spec that
+                          shares the store)
     spec-<name>.yaml      the spec of each run (as resolved)
 
 A trial's file appears only once its result is complete, so a killed client or worker leaves no
@@ -140,15 +142,15 @@ class ResultStore:
                 out.add(str(record['key']))
         return out
 
-    def write_summary(self, records: Iterable[Mapping[str, Any]]) -> Path:
-        """Write ``summary.parquet`` next to the trial files: one row per record, scalar columns only."""
+    def write_summary(self, records: Iterable[Mapping[str, Any]], name: str = 'summary') -> Path:
+        """Write ``<name>.parquet`` next to the trial files: one row per record, scalar columns only."""
         import pandas as pd
 
         rows = [summary_row(r) for r in records]
         frame = pd.DataFrame(rows)
-        path = self.folder / 'summary.parquet'
+        path = self.folder / f'{name}.parquet'
         self.folder.mkdir(parents=True, exist_ok=True)
-        tmp = self.folder / '.summary.parquet.tmp'
+        tmp = self.folder / f'.{name}.parquet.tmp'
         frame.to_parquet(tmp, index=False)
         os.replace(tmp, path)
         return path
