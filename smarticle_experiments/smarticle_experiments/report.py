@@ -266,6 +266,18 @@ def section_basin(ctx: Context) -> list[str]:
         ax.set_ylabel('phi (deg)')
         ax.set_title(f'phase {phase:g}: pink bound at end, blue apart, black inadmissible', fontsize=8)
     ctx.save(fig, 'basin')
+    polar = figure(5.5 * max(1, len(phases)), 5.5)
+    for k, phase in enumerate(phases):   # Fig. 4a: robot 2 around robot 1 at angle theta, rings = phi
+        ax = polar.add_subplot(1, max(1, len(phases)), k + 1, projection='polar')
+        sel = [x for x in rows if float(x[0].params['phase2']) == phase]
+        colours = ['k' if not r.get('admissible') else ('tab:pink' if r.get('bound_at_end') else 'tab:blue')
+                   for _, r in sel]
+        ax.scatter([math.radians(float(t.params['theta_deg'])) for t, _ in sel],
+                   [float(t.params['phi_deg']) % 360.0 + 30.0 for t, _ in sel], c=colours, s=40, marker='s')
+        ax.set_rlim(0.0, 400.0)
+        ax.set_rticks([30.0, 120.0, 210.0, 300.0], labels=['phi 0', '90', '180', '270'], fontsize=6)
+        ax.set_title(f'phase {phase:g}: angle = theta, ring = phi', fontsize=8)
+    ctx.save(polar, 'basin_polar')
     bound = [(t, r) for t, r in adm if r.get('bound_at_end')]
 
     def q14(t: Trial) -> bool:
@@ -282,7 +294,8 @@ def section_basin(ctx: Context) -> list[str]:
                    f'{anti.text(".0%", 1)}', bool(anti.n and anti.low > 0.5), 'inside = Wilson lower bound > 50 %'),
     ]
     return [f'{len(rows)} starts, {len(adm)} admissible, {len(bound)} bound at the end '
-            f'(bound in each of the last {ctx.spec.base.get("bound_tail")} periods).', '', '![basin](basin.png)']
+            f'(bound in each of the last {ctx.spec.base.get("bound_tail")} periods).', '', '![basin](basin.png)', '',
+            '![basin, polar](basin_polar.png)']
 
 
 def section_alpha_sweep(ctx: Context) -> list[str]:
