@@ -139,9 +139,11 @@ def cmd_run(args: argparse.Namespace) -> int:
              'grid': [dict(b) for b in spec.grid], 'seeds': list(spec.seeds), 'code': code}, sort_keys=False))
         workers = len(client.nthreads())
         sys.stderr.write(f'{spec.name}: {len(trials)} trials, store {store.folder}, {workers} workers\n')
-        stats = run_trials(trials, store, client, code, retries=args.retries, retry_failed=args.retry_failed,
-                           progress=not args.no_progress)
-    summary = store.write_summary(store.records(t.key for t in trials), summary_name(spec))
+        try:
+            stats = run_trials(trials, store, client, code, retries=args.retries, retry_failed=args.retry_failed,
+                               progress=not args.no_progress)
+        finally:   # also when interrupted: the summary of what is stored so far
+            summary = store.write_summary(store.records(t.key for t in trials), summary_name(spec))
     print(f'{spec.name}: {stats.total} trials: {stats.skipped} already stored, {stats.ok} done now, '
           f'{stats.failed} failed, {stats.lost} lost by the engine ({stats.wall_s:.1f} s, {stats.workers} workers); '
           f'summary {summary}')
