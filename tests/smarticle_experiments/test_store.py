@@ -52,3 +52,14 @@ def test_summary_is_parquet_with_scalar_columns_and_no_timing(tmp_path: Path) ->
 def test_code_version_names_the_package_commit_and_libraries() -> None:
     version = code_version()
     assert set(version) >= {'smarticle_experiments', 'commit', 'pybullet', 'numpy'}
+
+
+def test_the_progress_bar_counts_done_running_and_failed(capsys: object) -> None:
+    from smarticle_experiments.engine import Progress
+
+    bar = Progress(total=4, slots=2, enabled=True)
+    bar.step(failed=False)
+    bar.step(failed=True)
+    bar.close()
+    err = capsys.readouterr().err  # type: ignore[attr-defined]
+    assert 'done 1, running 2, failed 1' in err and '2/4' in err
