@@ -27,7 +27,6 @@ setup(
         'console_scripts': [
             'feedback = smarticle_feedback.feedback_node:main',
             'smarticle-feedback-calibrate = smarticle_feedback.impact_window:main',
-            'smarticle-feedback-p6 = smarticle_feedback.experiments:main',
         ],
     },
 )

@@ -13,9 +13,10 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = {'smarticle_driver': 'smarticle_driver', 'smarticle_sim': 'smarticle_sim',
-            'smarticle_feedback': 'smarticle_feedback', 'smarticle_tracking': 'smarticle_tracking',
-            'smarticle_bags': 'bags/smarticle_bags'}
+PACKAGES = {'smarticle_common': 'smarticle_common', 'smarticle_driver': 'smarticle_driver',
+            'smarticle_sim': 'smarticle_sim', 'smarticle_feedback': 'smarticle_feedback',
+            'smarticle_tracking': 'smarticle_tracking', 'smarticle_bags': 'bags/smarticle_bags',
+            'smarticle_experiments': 'smarticle_experiments', 'smarticle_bringup': 'smarticle_bringup'}
 IGNORE = shutil.ignore_patterns('__pycache__', '*.egg-info', '*.pyc', 'build', 'install', 'log')
 
 

@@ -26,7 +26,7 @@ from smarticle_common import topics
 from smarticle_common.launching import DomainReservation, ProcessGroup, isolated_ros_env
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))   # the repository root: tests.* helpers
-from smarticle_feedback.experiments import C2_START, Condition, c2_start, pair_lifetime, run_pair_trial
+from smarticle_experiments.p6 import C2_START, Condition, c2_start, pair_lifetime, run_pair_trial
 from tests.benchmarks._common import markdown_table, out_path, write_csv
 
 START_AT = 0.5

@@ -12,7 +12,7 @@ from smarticle_common.topics import FSR_FACES
 from smarticle_common.runs import Recording, save_npz
 
 from smarticle_feedback import impact_window
-from smarticle_feedback.experiments import C2_START, Condition, c2_start, run_pair_trial, summarize
+from smarticle_experiments.p6 import C2_START, Condition, c2_start, run_pair_trial, summarize
 
 
 @pytest.fixture(scope='module')

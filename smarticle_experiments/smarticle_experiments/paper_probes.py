@@ -1,16 +1,18 @@
 """Calibration of the sim against the paper (SPEC section 6): P7 drift, pair binding/transport, P1 sample.
 
-Every experiment is seeded and deterministic; trials run in parallel (``--procs``, at most 2 here).
+The exploratory probes of the calibration passes (docs/sim_calibration.md); the paper experiments proper
+run as specs through ``smarticle-experiments``. Every experiment is seeded and deterministic; trials run
+in parallel (``--procs``, at most 2 here).
 Tables are printed; each experiment appends rows to ``out/calibration/<experiment>.csv`` and draws
 ``out/calibration/<experiment>.png``. Run from the repository root, e.g.::
 
-    .venv/bin/python smarticle_sim/benchmarks/calibrate.py drift
-    .venv/bin/python smarticle_sim/benchmarks/calibrate.py pairs --periods 100
-    .venv/bin/python smarticle_sim/benchmarks/calibrate.py basin --periods 30 --step 30
-    .venv/bin/python smarticle_sim/benchmarks/calibrate.py knobs --periods 40
-    .venv/bin/python smarticle_sim/benchmarks/calibrate.py dense --seeds 10 --periods 300
-    .venv/bin/python smarticle_sim/benchmarks/calibrate.py dt --periods 40
-    .venv/bin/python smarticle_sim/benchmarks/calibrate.py phase --periods 100 --phase2 0.1
+    smarticle-paper-probes drift
+    smarticle-paper-probes pairs --periods 100
+    smarticle-paper-probes basin --periods 30 --step 30
+    smarticle-paper-probes knobs --periods 40
+    smarticle-paper-probes dense --seeds 10 --periods 300
+    smarticle-paper-probes dt --periods 40
+    smarticle-paper-probes phase --periods 100 --phase2 0.1
 
 Physics overrides for any experiment: ``--set friction_robot_robot=0.1 --set servo_torque=0.2`` (a
 PhysicsConfig or RobotSpec field); ``--servo-speed 7.854`` runs the gait at the paper's Chrono speed
@@ -34,17 +36,16 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from smarticle_common.facts import R_BIND_BL, RobotSpec
 from smarticle_common.gait import GaitConfig
-from smarticle_tracking.gliders import GliderClass, GliderConfig, analyse_gliders
-
+from smarticle_common.pairs import one_pair
 from smarticle_common.runs import Recording
+
 from smarticle_sim.batch import run_trial
 from smarticle_sim.errors import SceneError
 from smarticle_sim.scenes import RobotPlacement, Scene, dense_scene, pair_scene
-from smarticle_common.facts import RobotSpec
 from smarticle_sim.settings import PhysicsConfig, SimConfig
-from smarticle_common.facts import R_BIND_BL
-from smarticle_common.pairs import one_pair
+from smarticle_tracking.gliders import GliderClass, GliderConfig, analyse_gliders
 
 OUT = Path('out/calibration')
 
@@ -58,8 +59,8 @@ def make_config(overrides: dict[str, float] | None = None) -> SimConfig:
         return config
     physics_names = {f.name for f in fields(PhysicsConfig)}
     robot_names = {f.name for f in fields(RobotSpec)}
-    physics = {k: v for k, v in overrides.items() if k in physics_names}
-    robot = {k: v for k, v in overrides.items() if k in robot_names}
+    physics: dict[str, Any] = {k: v for k, v in overrides.items() if k in physics_names}
+    robot: dict[str, Any] = {k: v for k, v in overrides.items() if k in robot_names}
     unknown = set(overrides) - physics_names - robot_names
     if unknown:
         raise SystemExit(f'unknown setting(s) {sorted(unknown)}')

@@ -3,7 +3,7 @@
 The batch core runs directly (no ROS): a batch trial (``run_trial``) whose runner has, before the gait
 controller, a ``FeedbackController`` that feeds every control tick's FSR forces of both robots to one
 ``ImpactController`` per robot; a halt decided in a tick is part of that tick, so the in-process halt
-latency is at most one control tick. ``smarticle-feedback-p6 --quick`` runs a small version.
+latency is at most one control tick. ``smarticle-p6 --quick`` runs a small version.
 
 Lifetime of a pair: the glider analysis of ``smarticle_tracking.gliders`` (``analyse_gliders`` with
 ``min_periods = 1`` and ``r_bind`` in feedback-robot body lengths); the lifetime is the length of the
@@ -27,7 +27,7 @@ import numpy as np
 from smarticle_common.facts import GAIT_PERIOD, R_BIND_BL
 from smarticle_common.gait import GaitConfig
 
-from .controller import FeedbackConfig, ImpactController
+from smarticle_feedback.controller import FeedbackConfig, ImpactController
 
 #: The C2 start of the feedback robot (r in BL, theta, phi in deg, phases): with robot 2 a quarter period
 #: ahead (the paper's basin-scan phase p = 0.25) it binds as an aligned pair that travels (docs/feedback.md).
@@ -150,7 +150,7 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
 
 def default_feedback_config() -> FeedbackConfig:
     """The controller config of the shipped defaults (config/feedback.yaml)."""
-    from .parameters import config_from_values, default_values
+    from smarticle_feedback.parameters import config_from_values, default_values
 
     return config_from_values(default_values())
 
@@ -251,8 +251,8 @@ def plot_lifetimes(trials: Sequence[PairTrial], path: Path, periods: float) -> P
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of `smarticle-feedback-p6`: table on stdout, CSV and PNGs in --out."""
-    parser = argparse.ArgumentParser(prog='smarticle-feedback-p6', description=__doc__.split('\n')[0])
+    """Entry point of `smarticle-p6`: table on stdout, CSV and PNGs in --out."""
+    parser = argparse.ArgumentParser(prog='smarticle-p6', description=__doc__.split('\n')[0])
     parser.add_argument('--seeds', type=int, default=20)
     parser.add_argument('--periods', type=float, default=100.0)
     parser.add_argument('--open-loop', type=float, nargs='+', default=[70.0, 80.0, 90.0],

@@ -1,0 +1,502 @@
+"""Reports: Markdown and PNG figures from the stored trials of a spec, with the paper against the sim.
+
+Every number carries its 95 % interval (``stats``); each paper-against-sim row says whether the paper's
+value lies inside the sim's interval. Trials that ended in SimTrouble are excluded from the statistics
+(their runs stop early) but counted and listed; failed trials (the trial raised, or the engine lost it)
+are counted and listed with the last line of their traceback. Sections (the spec's ``report`` list):
+
+* ``p1`` fraction of trials with a pair bound >= ``positive_periods`` (and its isolated variant), and
+  the distance those gliders travel (W);
+* ``trajectories`` body-centre paths of one trial (Fig. 1c);
+* ``configurations`` r and phi histograms of the gliders, C1 / C2 shares (Fig. 3c, P2);
+* ``lifetimes`` lifetime against phi, semi-log lifetime histogram, Kaplan-Meier per class (P3);
+* ``basin`` bound-at-end map over (theta, phi) for each phase of robot 2 (Fig. 4a, P4);
+* ``alpha_sweep`` ensemble MSD, beta, V_com and r against alpha_max (Fig. 6, P5);
+* ``p6`` C2 lifetimes open loop against feedback, Kaplan-Meier (Fig. 5d);
+* ``drift`` single-robot drift per cycle (P7);
+* ``accuracy`` run time against error of the physics settings.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import defaultdict
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .spec import ExperimentSpec, Trial
+from .stats import Estimate, bootstrap_mean, kaplan_meier, wilson
+from .store import ResultStore, write_atomic
+from .trials import ensemble_msd, msd_beta
+
+
+@dataclass
+class Comparison:
+    """One paper-against-sim row."""
+
+    quantity: str
+    paper: str
+    sim: Estimate | None
+    sim_text: str
+    inside: bool | None
+    note: str = ''
+
+
+@dataclass
+class Context:
+    """What a report section sees: the spec, its trials, their stored records, the output folder."""
+
+    spec: ExperimentSpec
+    trials: list[Trial]
+    records: dict[str, dict[str, Any]]
+    folder: Path
+    figures: list[Path] = field(default_factory=list)
+    comparisons: list[Comparison] = field(default_factory=list)
+
+    def ok(self) -> list[tuple[Trial, dict[str, Any]]]:
+        """Finished trials that did not end in trouble, with their results."""
+        out = []
+        for t in self.trials:
+            rec = self.records.get(t.key)
+            if rec and rec.get('status') == 'ok' and not (rec.get('result') or {}).get('trouble'):
+                out.append((t, rec['result']))
+        return out
+
+    def seeds_text(self, pairs: Sequence[tuple[Trial, Any]]) -> str:
+        """The seeds of some trials, compactly."""
+        seeds = sorted({t.seed for t, _ in pairs})
+        if not seeds:
+            return '-'
+        if seeds == list(range(seeds[0], seeds[-1] + 1)) and len(seeds) > 2:
+            return f'{seeds[0]}..{seeds[-1]}'
+        return ', '.join(map(str, seeds))
+
+    def save(self, fig: Any, name: str) -> Path:
+        """Write a figure as ``<name>.png`` in the report folder."""
+        path = self.folder / f'{name}.png'
+        fig.tight_layout()
+        fig.savefig(path)
+        self.figures.append(path)
+        return path
+
+
+def figure(width: float = 7.0, height: float = 5.0) -> Any:
+    """A matplotlib Figure on the Agg backend."""
+    import matplotlib
+
+    matplotlib.use('Agg')
+    from matplotlib.figure import Figure
+
+    return Figure(figsize=(width, height), dpi=100)
+
+
+def legend(ax: Any, size: int = 7) -> None:
+    """A legend, if anything on ``ax`` has a label."""
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=size)
+
+
+def _paper(ctx: Context, name: str, default: Any = None) -> Any:
+    """A paper value from the spec's ``paper`` mapping."""
+    return ctx.spec.paper.get(name, default)
+
+
+def _gliders(pairs: Sequence[tuple[Trial, dict[str, Any]]]) -> list[dict[str, Any]]:
+    """Every glider of the given trials."""
+    return [g for _, res in pairs for g in res.get('gliders') or []]
+
+
+# ------------------------------------------------------------------ sections
+
+
+def section_p1(ctx: Context) -> list[str]:
+    """P1: trials with a pair bound >= positive_periods, the isolated variant, and their travel."""
+    pairs = ctx.ok()
+    n = len(pairs)
+    positive = sum(bool(r['positive']) for _, r in pairs)
+    isolated = sum(bool(r['positive_isolated']) for _, r in pairs)
+    limit = ctx.spec.base.get('positive_periods', 100)
+    iso_w = ctx.spec.base.get('isolation_w', 2.0)
+    frac, frac_iso = wilson(positive, n), wilson(isolated, n)
+    distances = [max((g for g in r['gliders'] if g['lifetime_periods'] >= limit),
+                     key=lambda g: g['lifetime_periods'])['distance_w'] for _, r in pairs if r['positive']]
+    dist = bootstrap_mean(distances)
+    p_frac, p_dist = _paper(ctx, 'fraction_bound', 0.64), _paper(ctx, 'distance_w', 2.9)
+    ctx.comparisons += [
+        Comparison(f'P1 trials with a pair bound >= {limit} periods', f'{p_frac:.0%} (97/151)', frac,
+                   f'{frac.text(".1%", 1)} ({positive}/{n})', frac.contains(p_frac)),
+        Comparison(f'P1 same, isolated pairs (no third robot within {iso_w:g} W)', f'{p_frac:.0%}', frac_iso,
+                   f'{frac_iso.text(".1%", 1)} ({isolated}/{n})', frac_iso.contains(p_frac)),
+        Comparison('P1 distance travelled by those gliders (W)', f'{p_dist} +- 0.2', dist, dist.text('.2f'),
+                   dist.contains(p_dist), 'longest glider >= the limit in each positive trial'),
+    ]
+    fig = figure(6, 4)
+    ax = fig.add_subplot(1, 1, 1)
+    ax.scatter([r['longest_periods'] for _, r in pairs], [r['longest_distance_w'] or 0.0 for _, r in pairs], s=12)
+    ax.axvline(limit, color='k', ls=':', lw=0.8)
+    ax.set_xlabel('longest glider lifetime (periods)')
+    ax.set_ylabel('its distance travelled (W)')
+    ax.set_title(f'P1: {positive}/{n} trials with a pair bound >= {limit} periods', fontsize=9)
+    ctx.save(fig, 'p1_longest')
+    return [f'Positive trial: a glider (glider analysis, K = {ctx.spec.base.get("min_periods")} periods, '
+            f'r_bind {ctx.spec.base.get("r_bind_bl")} BL or contact) bound for >= {limit} periods. '
+            f'Isolated: no third robot\'s centre within {iso_w:g} W of either robot in every frame of the bound '
+            'periods.', '', '![P1](p1_longest.png)']
+
+
+def section_trajectories(ctx: Context) -> list[str]:
+    """Fig. 1c: body-centre trajectories of one trial (the first positive one, else the first)."""
+    pairs = [(t, r) for t, r in ctx.ok() if r.get('trajectory_bl')]
+    if not pairs:
+        return ['No trajectory recorded.']
+    trial, res = next(((t, r) for t, r in pairs if r.get('positive')), pairs[0])
+    xy = np.array([[[math.nan if v is None else v for v in p] for p in row] for row in res['trajectory_bl']])
+    fig = figure(6, 6)
+    ax = fig.add_subplot(1, 1, 1)
+    longest = max(res.get('gliders') or [], key=lambda g: g['lifetime_periods'], default=None)
+    for k in range(xy.shape[1]):
+        bold = longest is not None and k in (longest['i'], longest['j'])
+        line, = ax.plot(xy[:, k, 0], xy[:, k, 1], lw=1.6 if bold else 0.7, label=f'{k}')
+        ax.plot(xy[0, k, 0], xy[0, k, 1], 'o', color=line.get_color(), ms=4)
+    ax.set_aspect('equal')
+    ax.set_xlabel('x (BL)')
+    ax.set_ylabel('y (BL)')
+    ax.set_title(f'seed {trial.seed}: one sample per period (o start; bold: longest glider)', fontsize=9)
+    legend(ax, 7)
+    ctx.save(fig, 'trajectories')
+    return [f'Trajectories of seed {trial.seed} (Fig. 1c):', '', '![trajectories](trajectories.png)']
+
+
+def section_configurations(ctx: Context) -> list[str]:
+    """Fig. 3c / P2: r and phi histograms of the gliders; C1 and C2 shares."""
+    pairs = ctx.ok()
+    gl = [g for g in _gliders(pairs) if g['r_bl'] is not None and g['phi_deg'] is not None]
+    n = len(gl)
+    c1, c2 = sum(g['class'] == 'C1' for g in gl), sum(g['class'] == 'C2' for g in gl)
+    e1, e2 = wilson(c1, n), wilson(c2, n)
+    both = n > 0 and e1.low > 0 and e2.low > 0
+    ctx.comparisons += [
+        Comparison('P2 share of gliders in C1 (phi near 180 deg)', 'one of two modes', e1,
+                   f'{e1.text(".1%", 1)} ({c1}/{n})', None, 'qualitative'),
+        Comparison('P2 share of gliders in C2 (phi near 0/360 deg)', 'one of two modes', e2,
+                   f'{e2.text(".1%", 1)} ({c2}/{n})', None, 'qualitative'),
+        Comparison('P2 both modes present', 'yes', None, 'yes' if both else 'no', both,
+                   'inside = both Wilson lower bounds > 0'),
+    ]
+    fig = figure(10, 4)
+    ax1, ax2 = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
+    for cls, colour in (('C1', 'tab:red'), ('C2', 'tab:blue'), ('unclassified', 'tab:gray')):
+        sel = [g for g in gl if g['class'] == cls]
+        ax1.hist([g['r_bl'] for g in sel], bins=np.linspace(0.8, 2.0, 25), alpha=0.6, color=colour, label=cls)
+        ax2.hist([g['phi_deg'] for g in sel], bins=np.linspace(0, 360, 37), alpha=0.6, color=colour, label=cls)
+    ax1.set_xlabel('r (BL)')
+    ax2.set_xlabel('phi (deg)')
+    for ax in (ax1, ax2):
+        ax.set_ylabel('gliders')
+        legend(ax, 7)
+    fig.suptitle(f'{n} gliders from {len(pairs)} trials (mean r, circular mean phi per glider)', fontsize=9)
+    ctx.save(fig, 'configurations')
+    return ['![r and phi histograms](configurations.png)']
+
+
+def section_lifetimes(ctx: Context) -> list[str]:
+    """P3: lifetime against phi, semi-log lifetime histogram, Kaplan-Meier per class."""
+    pairs = ctx.ok()
+    gl = _gliders(pairs)
+    periods = float(ctx.spec.base.get('periods', 300))
+    lines = ['| class | gliders | still bound at the end | KM median lifetime (periods) [95 %] |',
+             '| --- | ---: | ---: | --- |']
+    fig = figure(12, 4)
+    ax1, ax2, ax3 = (fig.add_subplot(1, 3, k) for k in (1, 2, 3))
+    for cls, colour in (('C1', 'tab:red'), ('C2', 'tab:blue'), ('unclassified', 'tab:gray')):
+        sel = [g for g in gl if g['class'] == cls]
+        if not sel:
+            lines.append(f'| {cls} | 0 | - | - |')
+            continue
+        life = [g['lifetime_periods'] for g in sel]
+        cens = [bool(g['ongoing']) for g in sel]
+        km = kaplan_meier(life, cens)
+        end = wilson(sum(cens), len(sel))
+        lines.append(f'| {cls} | {len(sel)} | {end.text(".0%", 1)} | {km.median.text(".0f")} |')
+        ax1.scatter([g['phi_deg'] for g in sel], life, s=10, color=colour, label=cls)
+        ax2.hist(life, bins=np.linspace(0, periods, 31), alpha=0.6, color=colour, label=cls)
+        ax3.step(np.r_[0, km.times], np.r_[1, km.survival], where='post', color=colour, label=cls)
+        ax3.fill_between(np.r_[0, km.times], np.r_[1, km.low], np.r_[1, km.high], step='post', color=colour,
+                         alpha=0.15)
+        if cls == 'C2':
+            lo, hi = _paper(ctx, 'c2_lifetime_range', [60, 100])
+            overlap = km.median.low <= hi and km.median.high >= lo
+            ctx.comparisons.append(Comparison('P3 C2 median lifetime (periods, Kaplan-Meier)', f'~{lo}-{hi}',
+                                              km.median, km.median.text('.0f'), bool(overlap),
+                                              'inside = paper range overlaps the interval'))
+        if cls == 'C1':
+            ctx.comparisons.append(Comparison('P3 C1 gliders still bound at the end of the trial', 'many', end,
+                                              f'{end.text(".0%", 1)} ({sum(cens)}/{len(sel)})',
+                                              bool(end.low > 0), 'inside = Wilson lower bound > 0'))
+    ax1.set_xlabel('phi (deg)')
+    ax1.set_ylabel('lifetime (periods)')
+    ax2.set_yscale('log')
+    ax2.set_xlabel('lifetime (periods)')
+    ax2.set_ylabel('gliders (log)')
+    ax3.set_xlabel('lifetime (periods)')
+    ax3.set_ylabel('survival (Kaplan-Meier, 95 % band)')
+    for ax in (ax1, ax2, ax3):
+        legend(ax, 7)
+    ctx.save(fig, 'lifetimes')
+    return ['Lifetimes of gliders still bound at the end of a trial are right-censored (Kaplan-Meier).', '',
+            *lines, '', '![lifetimes](lifetimes.png)']
+
+
+def section_basin(ctx: Context) -> list[str]:
+    """Fig. 4a / P4: bound-at-end over the (theta, phi) grid for each phase of robot 2."""
+    rows = [(t, r) for t, r in ctx.ok()]
+    adm = [(t, r) for t, r in rows if r.get('admissible')]
+    phases = sorted({float(t.params['phase2']) for t, _ in rows})
+    fig = figure(5.5 * max(1, len(phases)), 5)
+    for k, phase in enumerate(phases):
+        ax = fig.add_subplot(1, max(1, len(phases)), k + 1)
+        for t, r in (x for x in rows if float(x[0].params['phase2']) == phase):
+            colour = 'k' if not r.get('admissible') else ('tab:pink' if r.get('bound_at_end') else 'tab:blue')
+            ax.scatter(float(t.params['theta_deg']), float(t.params['phi_deg']), c=colour, s=30, marker='s')
+        ax.set_xlabel('theta (deg)')
+        ax.set_ylabel('phi (deg)')
+        ax.set_title(f'phase {phase:g}: pink bound at end, blue apart, black inadmissible', fontsize=8)
+    ctx.save(fig, 'basin')
+    polar = figure(5.5 * max(1, len(phases)), 5.5)
+    for k, phase in enumerate(phases):   # Fig. 4a: robot 2 around robot 1 at angle theta, rings = phi
+        ax = polar.add_subplot(1, max(1, len(phases)), k + 1, projection='polar')
+        sel = [x for x in rows if float(x[0].params['phase2']) == phase]
+        colours = ['k' if not r.get('admissible') else ('tab:pink' if r.get('bound_at_end') else 'tab:blue')
+                   for _, r in sel]
+        ax.scatter([math.radians(float(t.params['theta_deg'])) for t, _ in sel],
+                   [float(t.params['phi_deg']) % 360.0 + 30.0 for t, _ in sel], c=colours, s=40, marker='s')
+        ax.set_rlim(0.0, 400.0)
+        ax.set_rticks([30.0, 120.0, 210.0, 300.0], labels=['phi 0', '90', '180', '270'], fontsize=6)
+        ax.set_title(f'phase {phase:g}: angle = theta, ring = phi', fontsize=8)
+    ctx.save(polar, 'basin_polar')
+    bound = [(t, r) for t, r in adm if r.get('bound_at_end')]
+
+    def q14(t: Trial) -> bool:
+        theta = float(t.params['theta_deg']) % 360.0
+        return theta < 90.0 or theta > 270.0
+
+    share = wilson(sum(q14(t) for t, _ in bound), len(bound))
+    anti = wilson(sum(90.0 <= float(t.params['phi_deg']) % 360.0 <= 270.0 for t, _ in bound), len(bound))
+    ctx.comparisons += [
+        Comparison('P4 bound starts with theta in quadrants 1 and 4', 'mostly (> 50 %)', share,
+                   f'{share.text(".0%", 1)} ({sum(q14(t) for t, _ in bound)}/{len(bound)})',
+                   bool(share.n and share.low > 0.5), 'inside = Wilson lower bound > 50 %'),
+        Comparison('P4 bound starts with antiparallel normals (90 <= phi <= 270 deg)', 'mostly (> 50 %)', anti,
+                   f'{anti.text(".0%", 1)}', bool(anti.n and anti.low > 0.5), 'inside = Wilson lower bound > 50 %'),
+    ]
+    return [f'{len(rows)} starts, {len(adm)} admissible, {len(bound)} bound at the end '
+            f'(bound in each of the last {ctx.spec.base.get("bound_tail")} periods).', '', '![basin](basin.png)', '',
+            '![basin, polar](basin_polar.png)']
+
+
+def section_alpha_sweep(ctx: Context) -> list[str]:
+    """Fig. 6 / P5: ensemble MSD, beta, V_com and r of bound pairs against alpha_max."""
+    by_alpha: dict[float, list[dict[str, Any]]] = defaultdict(list)
+    pairs = ctx.ok()
+    for t, r in pairs:
+        longest = max(r.get('gliders') or [], key=lambda g: g['lifetime_periods'], default=None)
+        if longest is not None:
+            by_alpha[float(t.params['alpha_max_deg'])].append(longest)
+    alphas = sorted({float(t.params['alpha_max_deg']) for t, _ in pairs})
+    lines = ['| alpha_max (deg) | bound pairs | beta (ensemble) | beta per pair, mean [95 %] | '
+             'V_com (W/period) [95 %] | r (BL) [95 %] | C2 share [95 %] |',
+             '| ---: | ---: | ---: | --- | --- | --- | --- |']
+    fig = figure(13, 4)
+    axm, axb, axv, axr = (fig.add_subplot(1, 4, k) for k in (1, 2, 3, 4))
+    table: dict[str, list[tuple[float, Estimate]]] = defaultdict(list)
+    total_trials: dict[float, int] = defaultdict(int)
+    for t, _ in pairs:
+        total_trials[float(t.params['alpha_max_deg'])] += 1
+    for alpha in alphas:
+        gl = by_alpha.get(alpha, [])
+        lags, values = ensemble_msd([g['com_path_w'] for g in gl])
+        beta_ens = msd_beta(lags, values)
+        if lags.size:
+            axm.loglog(lags, values, 'o-', ms=3, label=f'{alpha:g} deg')
+        beta = bootstrap_mean([g['beta'] for g in gl if g['beta'] is not None])
+        v = bootstrap_mean([g['v_com_w_per_period'] for g in gl if g['v_com_w_per_period'] is not None])
+        r_est = bootstrap_mean([g['r_bl'] for g in gl if g['r_bl'] is not None])
+        c2 = wilson(sum(g['class'] == 'C2' for g in gl), len(gl))
+        for name, est in (('beta', beta), ('v', v), ('r', r_est)):
+            table[name].append((alpha, est))
+        lines.append(f'| {alpha:g} | {len(gl)}/{total_trials[alpha]} | {beta_ens:.2f} | {beta.text(".2f")} | '
+                     f'{v.text(".3f")} | {r_est.text(".3f")} | {c2.text(".0%", 1)} |')
+        target = _paper(ctx, 'beta', 1.8)
+        if alpha in (90.0, 10.0):
+            ctx.comparisons.append(Comparison(f'P5 beta at {alpha:g} deg', f'~{target}', beta, beta.text('.2f'),
+                                              beta.contains(target), 'bootstrap over pairs'))
+        if alpha < 70.0:
+            ctx.comparisons.append(Comparison(f'P5 share of C2 gliders at {alpha:g} deg', '0 (none below 70 deg)',
+                                              c2, c2.text('.0%', 1), c2.contains(0.0) if c2.n else None))
+    for ax, name, label in ((axb, 'beta', 'beta'), (axv, 'v', 'V_com (W / period)'), (axr, 'r', 'r (BL)')):
+        pts = table[name]
+        x = [a for a, _ in pts]
+        y = np.array([e.value for _, e in pts])
+        err = np.array([[e.value - e.low if math.isfinite(e.low) else 0.0 for _, e in pts],
+                        [e.high - e.value if math.isfinite(e.high) else 0.0 for _, e in pts]])
+        ax.errorbar(x, y, yerr=err, fmt='o-', capsize=3)
+        ax.set_xlabel('alpha_max (deg)')
+        ax.set_ylabel(label)
+    axm.set_xlabel('lag (periods)')
+    axm.set_ylabel('ensemble MSD (W^2)')
+    legend(axm, 6)
+    ctx.save(fig, 'alpha_sweep')
+    return ['Per pair: its longest glider. beta per pair = fit of its own path (NaN when too short); '
+            'ensemble beta = fit of the ensemble MSD <x^2> - <x>^2 over all pairs at that amplitude.', '',
+            *lines, '', '![alpha sweep](alpha_sweep.png)']
+
+
+def section_p6(ctx: Context) -> list[str]:
+    """Fig. 5d / P6: C2 lifetimes open loop against feedback (Kaplan-Meier, censored at the trial's end)."""
+    groups: dict[tuple[float, bool], list[dict[str, Any]]] = defaultdict(list)
+    for t, r in ctx.ok():
+        groups[(float(t.params['alpha_max_deg']), bool(t.params['feedback']))].append(r)
+    lines = ['| condition | trials | reached the end | KM median lifetime (periods) [95 %] | mean halts |',
+             '| --- | ---: | ---: | --- | ---: |']
+    fig = figure(11, 4.5)
+    ax1, ax2 = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
+    medians: dict[tuple[float, bool], Estimate] = {}
+    for x, (cond, rows) in enumerate(sorted(groups.items())):
+        label = f'{"feedback" if cond[1] else "open loop"} {cond[0]:g} deg'
+        km = kaplan_meier([r['lifetime_periods'] for r in rows], [bool(r['censored']) for r in rows])
+        medians[cond] = km.median
+        lines.append(f'| {label} | {len(rows)} | {km.censored} | {km.median.text(".0f")} | '
+                     f'{np.mean([r["halts"] for r in rows]):.1f} |')
+        life = np.array([r['lifetime_periods'] for r in rows], dtype=float)
+        ax1.scatter(x + np.linspace(-0.15, 0.15, life.size), life, s=12)
+        ax2.step(np.r_[0, km.times], np.r_[1, km.survival], where='post', label=label)
+    ax1.set_xticks(range(len(groups)), [f'{"fb" if c[1] else "ol"} {c[0]:g}' for c in sorted(groups)], fontsize=8)
+    ax1.set_ylabel('C2 lifetime (periods)')
+    ax2.set_xlabel('lifetime (periods)')
+    ax2.set_ylabel('survival (Kaplan-Meier)')
+    legend(ax2, 7)
+    ctx.save(fig, 'p6_lifetimes')
+    fb = [m for (_, f), m in medians.items() if f]
+    ol = [m for (_, f), m in medians.items() if not f]
+    if fb and ol:
+        best_ol = max(ol, key=lambda m: m.high)
+        longer = all(m.low > best_ol.high for m in fb)
+        ctx.comparisons.append(Comparison('P6 feedback C2 gliders live longer than open loop', 'much longer',
+                                          None, f'feedback median(s) {", ".join(m.text(".0f") for m in fb)} vs best '
+                                          f'open loop {best_ol.text(".0f")}', longer,
+                                          'inside = every feedback median interval above the open-loop ones'))
+    return [*lines, '', '![P6 lifetimes](p6_lifetimes.png)']
+
+
+def section_drift(ctx: Context) -> list[str]:
+    """P7: single-robot drift per cycle (um), bootstrap over seeds, per amplitude."""
+    groups: dict[float, list[float]] = defaultdict(list)
+    for t, r in ctx.ok():
+        groups[float(t.params['alpha_max_deg'])].append(r['drift_um_per_cycle'])
+    target = _paper(ctx, 'drift_um', 75.0)
+    lines = ['| alpha_max (deg) | robots | drift (um / cycle) [95 %] |', '| ---: | ---: | --- |']
+    for alpha, values in sorted(groups.items()):
+        est = bootstrap_mean(values)
+        lines.append(f'| {alpha:g} | {len(values)} | {est.text(".1f")} |')
+        if alpha == 90.0:
+            ctx.comparisons.append(Comparison('P7 drift per cycle at 90 deg (um)', f'~{target:g}', est,
+                                              est.text('.1f'), est.contains(target), 'bootstrap over seeds'))
+    return lines
+
+
+def section_accuracy(ctx: Context) -> list[str]:
+    """Run time against error: each setting against the sweep's finest (highest rate, most iterations)."""
+    rows = [(t, r) for t, r in ctx.ok()]
+    if not rows:
+        return ['No finished settings.']
+    ref_t, ref = max(rows, key=lambda x: (float(x[0].params['rate_hz']), int(x[0].params['solver_iterations'])))
+    out = ['| rate (Hz) | iterations | seed | wall s / sim s | pos err 10 T (BL) | r err (BL) | drift err |',
+           '| ---: | ---: | ---: | ---: | ---: | ---: | ---: |']
+    pts = []
+    for t, r in rows:
+        pos = math.nan
+        if r.get('xy10_bl') and ref.get('xy10_bl') and t.seed == ref_t.seed:
+            pos = float(np.linalg.norm(np.array(r['xy10_bl']) - np.array(ref['xy10_bl']), axis=1).mean())
+        r_err = abs(r['r_mean_bl'] - ref['r_mean_bl'])
+        d_err = abs(r['drift_um_per_cycle'] - ref['drift_um_per_cycle']) / ref['drift_um_per_cycle'] \
+            if ref['drift_um_per_cycle'] else math.nan
+        out.append(f'| {t.params["rate_hz"]:g} | {t.params["solver_iterations"]} | {t.seed} | '
+                   f'{r["wall_per_sim_s"]:.4f} | {pos:.4f} | {r_err:.4f} | {d_err:.1%} |')
+        pts.append((int(t.params['solver_iterations']), r['wall_per_sim_s'], pos))
+    fig = figure(6, 4)
+    ax = fig.add_subplot(1, 1, 1)
+    for it in sorted({p[0] for p in pts}):
+        sel = sorted((w, e) for i, w, e in pts if i == it and math.isfinite(e) and e > 0)
+        if sel:
+            ax.loglog([w for w, _ in sel], [e for _, e in sel], 'o-', label=f'{it} iterations')
+    ax.set_xlabel('wall s per simulated s')
+    ax.set_ylabel('position error after 10 periods (BL)')
+    legend(ax)
+    ctx.save(fig, 'accuracy')
+    return [f'Reference: {ref_t.params["rate_hz"]:g} Hz, {ref_t.params["solver_iterations"]} iterations.', '',
+            *out, '', '![accuracy](accuracy.png)']
+
+
+SECTIONS: dict[str, Callable[[Context], list[str]]] = {
+    'p1': section_p1, 'trajectories': section_trajectories, 'configurations': section_configurations,
+    'lifetimes': section_lifetimes, 'basin': section_basin, 'alpha_sweep': section_alpha_sweep,
+    'p6': section_p6, 'drift': section_drift, 'accuracy': section_accuracy,
+}
+
+
+def _yes_no(value: bool | None) -> str:
+    """The 'inside' cell."""
+    return 'n/a' if value is None else ('yes' if value else 'no')
+
+
+def trouble_lines(ctx: Context) -> list[str]:
+    """Counts and lists of trials that are missing, failed or ended in trouble."""
+    missing = [t for t in ctx.trials if t.key not in ctx.records]
+    failed = [(t, ctx.records[t.key]) for t in ctx.trials
+              if t.key in ctx.records and ctx.records[t.key].get('status') != 'ok']
+    trouble = [(t, ctx.records[t.key]) for t in ctx.trials if t.key in ctx.records
+               and ctx.records[t.key].get('status') == 'ok' and (ctx.records[t.key].get('result') or {}).get('trouble')]
+    lines = ['## Trials not in the statistics', '',
+             f'{len(ctx.trials)} trials in the spec: {len(ctx.ok())} used, {len(trouble)} ended in sim trouble, '
+             f'{len(failed)} failed, {len(missing)} not run yet.', '']
+    if trouble or failed:
+        lines += ['| key | seed | grid point | what |', '| --- | ---: | --- | --- |']
+        for t, rec in trouble:
+            lines.append(f'| {t.key} | {t.seed} | {dict(t.point)} | trouble: {rec["result"]["trouble"][:160]} |')
+        for t, rec in failed:
+            lines.append(f'| {t.key} | {t.seed} | {dict(t.point)} | failed ({rec.get("error_kind")}): '
+                         f'{str(rec.get("error", ""))[:160]} |')
+    return lines
+
+
+def write_report(spec: ExperimentSpec, trials: list[Trial], store: ResultStore, code: Mapping[str, str]) -> Path:
+    """Write ``report.md`` and the PNG figures of ``spec`` into ``<store>/report-<name>/``; return the .md path."""
+    folder = store.folder / f'report-{spec.name}'
+    folder.mkdir(parents=True, exist_ok=True)
+    records = {r['key']: r for r in store.records(t.key for t in trials)}
+    ctx = Context(spec, trials, records, folder)
+    body: list[str] = []
+    for name in spec.report:
+        body += [f'## {name}', '', *SECTIONS[name](ctx), '']
+    ok = ctx.ok()
+    head = [f'# {spec.name}: {spec.description}', '',
+            f'Spec `{spec.source or spec.name}`, kind `{spec.kind}`, {len(trials)} trials '
+            f'({len(spec.points())} grid points x {len(spec.seeds)} seeds), {spec.base.get("periods", "?")} periods; '
+            f'code {dict(code)}.', '',
+            '## Paper against sim', '',
+            '| quantity | paper | sim [95 % interval] | interval | n trials / values | seeds | paper inside | note |',
+            '| --- | --- | --- | --- | ---: | --- | --- | --- |']
+    for c in ctx.comparisons:
+        method = c.sim.method if c.sim is not None else '-'
+        n_values = f' / {c.sim.n}' if c.sim is not None else ''
+        head.append(f'| {c.quantity} | {c.paper} | {c.sim_text} | {method} | {len(ok)}{n_values} | '
+                    f'{ctx.seeds_text(ok)} | '
+                    f'{_yes_no(c.inside)} | {c.note} |')
+    text = '\n'.join([*head, '', *body, *trouble_lines(ctx), ''])
+    path = folder / 'report.md'
+    write_atomic(path, text)
+    return path

@@ -1,0 +1,311 @@
+"""Experiments as data: a YAML spec (scene, settings, grid, seeds, periods, analysis, report) and its trials.
+
+A spec file is a mapping with these keys (every other key is refused, naming it)::
+
+    name: p1                      # required; also the default store folder
+    description: one line
+    kind: dense                   # trial kind (trials.KINDS) or a user's importable module:function
+    store: p1                     # optional store folder (specs that share trials share a store)
+    preset: small                 # robot preset
+    periods: 300                  # gait periods per trial (> 0)
+    physics: {contact_erp: 0.6}   # PhysicsConfig overrides (default: the project's defaults)
+    robot: {}                     # RobotSpec overrides
+    params: {robots: 7}           # the kind's scene / trial parameters (see `smarticle-experiments list -v`)
+    analysis: {min_periods: 30}   # the kind's in-trial analysis parameters (same namespace as params)
+    grid: {theta_deg: [0, 30]}    # parameter -> list of values; the trials are the product x seeds
+                                  # (or a list of such blocks: the union of their products)
+    seeds: 151                    # a count (0..n-1), a list, or {start: 0, count: 151}
+    report: [p1, trajectories]    # report sections (report.SECTIONS)
+    paper: {fraction: 0.64}       # the paper's values the report sections compare with
+
+Grid keys may name physics or robot fields as ``physics.time_step`` / ``robot.arm_mass``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from .errors import SpecError
+from .trials import KINDS, PHYSICS_FIELDS, ROBOT_FIELDS, resolve_kind, validate_params
+
+#: The sections a spec's ``report`` may name (``report.SECTIONS`` draws each; a test keeps the two equal).
+REPORT_SECTIONS: tuple[str, ...] = ('p1', 'trajectories', 'configurations', 'lifetimes', 'basin', 'alpha_sweep',
+                                    'p6', 'drift', 'accuracy')
+
+SPEC_KEYS: tuple[str, ...] = ('name', 'description', 'kind', 'store', 'preset', 'periods', 'physics', 'robot',
+                              'params', 'analysis', 'grid', 'seeds', 'report', 'paper')
+
+
+@dataclass(frozen=True)
+class Trial:
+    """One trial: its kind, fully merged parameters, seed and store key."""
+
+    kind: str
+    params: Mapping[str, Any]
+    seed: int
+    key: str
+    point: Mapping[str, Any] = field(default_factory=dict)   # the grid values of this trial
+
+
+@dataclass(frozen=True)
+class ExperimentSpec:
+    """A validated experiment spec (see the module docstring for the YAML keys)."""
+
+    name: str
+    kind: str
+    base: Mapping[str, Any]                     # merged parameters before the grid
+    grid: tuple[Mapping[str, Sequence[Any]], ...]   # blocks; the points are the union of their products
+    seeds: tuple[int, ...]
+    description: str = ''
+    store: str = ''
+    report: tuple[str, ...] = ()
+    paper: Mapping[str, Any] = field(default_factory=dict)
+    source: str = ''
+
+    def with_seed_count(self, count: int) -> ExperimentSpec:
+        """The same spec with seeds 0..count-1 (``--trials``); SpecError unless count >= 1."""
+        if isinstance(count, bool) or not isinstance(count, int) or count < 1:
+            raise SpecError(f'{self.name}: --trials must be a whole number >= 1, got {count!r}')
+        return _replace(self, seeds=tuple(range(count)))
+
+    def with_periods(self, periods: float) -> ExperimentSpec:
+        """The same spec with ``periods`` gait periods per trial; SpecError unless > 0."""
+        _check_positive(self.name, 'periods', periods)
+        return _replace(self, base={**self.base, 'periods': float(periods)})
+
+    def points(self) -> list[dict[str, Any]]:
+        """The grid points (parameter -> value): each block's product in key order, blocks in order; [{}] if none."""
+        out: list[dict[str, Any]] = []
+        for block in self.grid or ({},):
+            names = list(block)
+            out += [dict(zip(names, values, strict=True)) for values in itertools.product(*block.values())]
+        return out
+
+    def trials(self, code: Mapping[str, str]) -> list[Trial]:
+        """Every trial (grid points x seeds), keyed by (kind, parameters, seed, ``code`` version)."""
+        out = []
+        for point in self.points():
+            params = apply_point(self.base, point)
+            for seed in self.seeds:
+                out.append(Trial(self.kind, params, seed, trial_key(self.kind, params, seed, code), point))
+        return out
+
+
+def _replace(spec: ExperimentSpec, **changes: Any) -> ExperimentSpec:
+    """dataclasses.replace for the frozen spec."""
+    from dataclasses import replace
+
+    return replace(spec, **changes)
+
+
+def coerce(default: Any, value: Any) -> Any:
+    """``value`` as a float where the default is a float and the spec wrote a whole number (90 hashes as 90.0)."""
+    if isinstance(default, float) and isinstance(value, int) and not isinstance(value, bool):
+        return float(value)
+    return value
+
+
+def apply_point(base: Mapping[str, Any], point: Mapping[str, Any]) -> dict[str, Any]:
+    """The base parameters with one grid point applied (``physics.X`` / ``robot.X`` go into those mappings)."""
+    params = {**base}
+    if 'physics' in base or 'robot' in base:
+        params.update(physics=dict(base.get('physics') or {}), robot=dict(base.get('robot') or {}))
+    for name, value in point.items():
+        group, dot, leaf = name.partition('.')
+        if dot:
+            params[group][leaf] = value
+        else:
+            params[name] = coerce(base.get(name), value)
+    return params
+
+
+def canonical(value: Any) -> str:
+    """Canonical JSON of a value (sorted keys, no spaces) for hashing."""
+    return json.dumps(value, sort_keys=True, separators=(',', ':'), default=str)
+
+
+def trial_key(kind: str, params: Mapping[str, Any], seed: int, code: Mapping[str, str]) -> str:
+    """The store key of a trial: a hash of its kind, full parameters, seed and the code's version."""
+    text = canonical({'kind': kind, 'params': params, 'seed': seed, 'code': code})
+    return hashlib.sha256(text.encode()).hexdigest()[:24]
+
+
+def _check_positive(name: str, field_name: str, value: Any) -> None:
+    """SpecError unless ``value`` is a finite number > 0."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+        raise SpecError(f'{name}: {field_name} must be a number > 0, got {value!r}')
+
+
+def _mapping(name: str, field_name: str, value: Any) -> dict[str, Any]:
+    """A mapping field (None -> {}) or SpecError."""
+    if value is None:
+        return {}
+    if not isinstance(value, Mapping):
+        raise SpecError(f'{name}: {field_name} must be a mapping, got {type(value).__name__}')
+    return dict(value)
+
+
+def _grid_block(name: str, kind: str, known: Any, block: Mapping[str, Any]) -> dict[str, list[Any]]:
+    """One grid block (parameter -> non-empty list of values), checked against the kind's parameters."""
+    grid: dict[str, list[Any]] = {}
+    for key, values in block.items():
+        group, dot, leaf = str(key).partition('.')
+        if dot:
+            allowed = {'physics': PHYSICS_FIELDS, 'robot': ROBOT_FIELDS}.get(group)
+            if allowed is None or leaf not in allowed or (known is not None and group not in known.defaults):
+                raise SpecError(f'{name}: unknown key grid.{key} (not a physics or robot setting of kind {kind!r})')
+        elif known is not None and (key not in known.defaults or key in ('physics', 'robot')):
+            raise SpecError(f'{name}: unknown key grid.{key} for kind {kind!r}')
+        if not isinstance(values, list):
+            raise SpecError(f'{name}: grid.{key} must be a list of values, got {values!r}')
+        if not values:
+            raise SpecError(f'{name}: grid.{key} is an empty list: the grid expands to no trials')
+        grid[str(key)] = values
+    return grid
+
+
+def parse_seeds(name: str, value: Any) -> tuple[int, ...]:
+    """Seeds from a count, a list or {start, count}; SpecError for zero, negative or non-integers."""
+    def whole(v: Any, what: str, low: int) -> int:
+        if isinstance(v, bool) or not isinstance(v, int) or v < low:
+            raise SpecError(f'{name}: {what} must be a whole number >= {low}, got {v!r}')
+        return v
+
+    if value is None:
+        return (0,)
+    if isinstance(value, Mapping):
+        extra = sorted(set(value) - {'start', 'count'})
+        if extra:
+            raise SpecError(f'{name}: unknown key seeds.{extra[0]} (known: start, count)')
+        start = whole(value.get('start', 0), 'seeds.start', 0)
+        return tuple(range(start, start + whole(value.get('count'), 'seeds.count', 1)))
+    if isinstance(value, list):
+        if not value:
+            raise SpecError(f'{name}: seeds is an empty list: no trials to run')
+        seeds = tuple(whole(v, 'each seed', 0) for v in value)
+        if len(set(seeds)) != len(seeds):
+            raise SpecError(f'{name}: seeds lists a seed twice')
+        return seeds
+    return tuple(range(whole(value, 'seeds', 1)))
+
+
+def spec_from_mapping(data: Any, source: str = '') -> ExperimentSpec:
+    """Validate a parsed YAML mapping into an ExperimentSpec; SpecError names the first bad field."""
+    if not isinstance(data, Mapping):
+        raise SpecError(f'{source or "spec"}: a spec must be a YAML mapping, got {type(data).__name__}')
+    name = data.get('name')
+    if not isinstance(name, str) or not name or any(c in name for c in '/\\ '):
+        raise SpecError(f'{source or "spec"}: name must be a non-empty word (no spaces or slashes), got {name!r}')
+    unknown = [k for k in data if k not in SPEC_KEYS]
+    if unknown:
+        raise SpecError(f'{name}: unknown key {unknown[0]!r} (known: {", ".join(SPEC_KEYS)})')
+    kind = data.get('kind')
+    if not isinstance(kind, str):
+        raise SpecError(f'{name}: kind is required (one of {", ".join(KINDS)} or module:function)')
+    try:
+        known = resolve_kind(kind)
+    except SpecError as exc:
+        raise SpecError(f'{name}: {exc}') from None
+    if known is None:
+        from .trials import trial_function
+
+        try:
+            trial_function(kind)   # a user's module:function must import here (and on the workers)
+        except SpecError as exc:
+            raise SpecError(f'{name}: {exc}') from None
+    base: dict[str, Any] = dict(known.defaults) if known else {}
+    for group in ('params', 'analysis'):
+        values = _mapping(name, group, data.get(group))
+        if known is not None:
+            bad = [k for k in values if k not in known.defaults or k in ('physics', 'robot')]
+            if bad:
+                raise SpecError(f'{name}: unknown key {group}.{bad[0]} for kind {kind!r} '
+                                f'(known: {", ".join(k for k in known.defaults if k not in ("physics", "robot"))})')
+        base.update({k: coerce(base.get(k), v) for k, v in values.items()})
+    for group, allowed in (('physics', PHYSICS_FIELDS), ('robot', ROBOT_FIELDS)):
+        values = _mapping(name, group, data.get(group))
+        bad = sorted(set(values) - allowed)
+        if bad:
+            raise SpecError(f'{name}: unknown key {group}.{bad[0]} (not a {group} setting)')
+        if values and known is not None and group not in known.defaults:
+            raise SpecError(f'{name}: {group} overrides are not supported by kind {kind!r}')
+        if values or known is None or group in base:
+            base[group] = values
+    if 'preset' in data:
+        if known is not None and 'preset' not in known.defaults:
+            raise SpecError(f'{name}: preset is not supported by kind {kind!r}')
+        base['preset'] = data['preset']
+    if 'periods' in data:
+        _check_positive(name, 'periods', data['periods'])
+        base['periods'] = float(data['periods'])
+    raw = data.get('grid')
+    blocks = raw if isinstance(raw, list) else [raw]
+    if isinstance(raw, list) and not raw:
+        raise SpecError(f'{name}: grid is an empty list: the grid expands to no trials')
+    grid = tuple(_grid_block(name, kind, known, _mapping(name, 'grid', block)) for block in blocks)
+    seeds = parse_seeds(name, data.get('seeds'))
+    report = data.get('report') or []
+    if not isinstance(report, list) or not all(isinstance(r, str) for r in report):
+        raise SpecError(f'{name}: report must be a list of section names')
+    bad_sections = [r for r in report if r not in REPORT_SECTIONS]
+    if bad_sections:
+        raise SpecError(f'{name}: unknown report section {bad_sections[0]!r} (known: {", ".join(REPORT_SECTIONS)})')
+    paper = _mapping(name, 'paper', data.get('paper'))
+    store = data.get('store', name)
+    if not isinstance(store, str) or not store or any(c in store for c in '/\\ '):
+        raise SpecError(f'{name}: store must be a folder name, got {store!r}')
+    spec = ExperimentSpec(name=name, kind=kind, base=base, grid=grid, seeds=seeds,
+                          description=str(data.get('description', '')), store=store, report=tuple(report),
+                          paper=paper, source=source)
+    if 'periods' in base:
+        _check_positive(name, 'periods', base['periods'])
+    for point in spec.points():   # every grid point must make a valid config and gait
+        try:
+            validate_params(kind, apply_point(base, point))
+        except SpecError as exc:
+            where = f' at grid point {point}' if point else ''
+            raise SpecError(f'{name}: {exc}{where}') from None
+    return spec
+
+
+def builtin_dir() -> Path:
+    """The folder of the shipped specs (config/experiments of the package, source tree or install share)."""
+    here = Path(__file__).resolve().parent.parent / 'config' / 'experiments'
+    if here.is_dir():
+        return here
+    try:
+        from ament_index_python.packages import get_package_share_directory
+
+        return Path(get_package_share_directory('smarticle_experiments')) / 'config' / 'experiments'
+    except (ImportError, LookupError, ValueError):
+        return here
+
+
+def builtin_names() -> list[str]:
+    """Names of the shipped specs."""
+    return sorted(p.stem for p in builtin_dir().glob('*.yaml'))
+
+
+def load_spec(name_or_path: str) -> ExperimentSpec:
+    """Load a shipped spec by name (``p1``) or a user's YAML file by path; SpecError if missing or invalid."""
+    path = Path(name_or_path)
+    if not (path.suffix in ('.yaml', '.yml') or path.exists()):
+        path = builtin_dir() / f'{name_or_path}.yaml'
+        if not path.is_file():
+            raise SpecError(f'no experiment {name_or_path!r}: not a file and not one of {", ".join(builtin_names())}')
+    if not path.is_file():
+        raise SpecError(f'spec file {path} does not exist')
+    try:
+        data = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise SpecError(f'{path}: not valid YAML ({str(exc).splitlines()[0]})') from None
+    return spec_from_mapping(data, str(path))

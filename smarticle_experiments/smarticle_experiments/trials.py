@@ -1,0 +1,365 @@
+"""The trial kinds: pure functions of (params, seed) that run one trial and return a compact result.
+
+This is the only module of the package that imports the other smarticle packages (sim, tracking,
+feedback, driver), so a refactor of those needs only these imports re-pointed.
+
+A trial function takes the merged parameter mapping of one trial (``KINDS[kind].defaults`` overridden by
+the spec) and its seed, and returns a JSON-ready dict; it never reads or writes shared state. Lengths in
+the results are in body lengths (``_bl``) or in W (``_w``, W = BL for the smarticle), angles in degrees
+(``_deg``), speeds as stated. ``trouble`` is the SimTrouble message that ended the trial early ('' if
+none): such a trial still returns what it measured, and the report counts and lists it.
+
+Isolation rule of a glider (the glider analysis has none): **isolated** = in every frame of its bound
+periods, no third robot's centre lies within ``isolation_w`` W (default 2 W) of either robot's centre.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, fields, replace
+from typing import Any
+
+import numpy as np
+from smarticle_common.gait import GaitConfig
+from smarticle_sim.batch import Recording, run_trial
+from smarticle_sim.errors import SceneError
+from smarticle_sim.scenes import RobotPlacement, Scene, dense_scene, pair_scene
+from smarticle_sim.settings import PhysicsConfig, RobotSpec, SimConfig, robot_preset
+from smarticle_tracking.gliders import Glider, GliderConfig, analyse_gliders
+from smarticle_tracking.msd import fit_msd_exponent, msd
+
+from .errors import SpecError
+
+TrialFunction = Callable[[Mapping[str, Any], int], dict[str, Any]]
+
+#: PhysicsConfig and RobotSpec field names a spec may override (``physics:`` and ``robot:`` mappings).
+PHYSICS_FIELDS: frozenset[str] = frozenset(f.name for f in fields(PhysicsConfig))
+ROBOT_FIELDS: frozenset[str] = frozenset(f.name for f in fields(RobotSpec)) - {'name'}
+
+
+def make_config(preset: str, physics: Mapping[str, Any], robot: Mapping[str, Any]) -> SimConfig:
+    """The project's default SimConfig for ``preset`` with PhysicsConfig / RobotSpec overrides (validated)."""
+    unknown = sorted(set(physics) - PHYSICS_FIELDS)
+    if unknown:
+        raise SpecError(f'physics.{unknown[0]} is not a PhysicsConfig field; '
+                        f'known: {", ".join(sorted(PHYSICS_FIELDS))}')
+    unknown = sorted(set(robot) - ROBOT_FIELDS)
+    if unknown:
+        raise SpecError(f'robot.{unknown[0]} is not a RobotSpec field; known: {", ".join(sorted(ROBOT_FIELDS))}')
+    return SimConfig(replace(robot_preset(preset), **robot), replace(PhysicsConfig(), **physics))
+
+
+def make_gait(config: SimConfig, alpha_max_deg: float, servo_speed: float | None = None,
+              phase: float = 0.0) -> GaitConfig:
+    """The square gait at ``alpha_max_deg`` (servo speed: given, else the robot's)."""
+    return GaitConfig.from_degrees(float(alpha_max_deg), servo_speed=servo_speed or config.robot.servo_speed,
+                                   phase=phase)
+
+
+def _config_of(p: Mapping[str, Any]) -> SimConfig:
+    """SimConfig of a trial's parameters."""
+    return make_config(str(p['preset']), dict(p.get('physics') or {}), dict(p.get('robot') or {}))
+
+
+# ------------------------------------------------------------------ glider measurements
+
+
+def _rounded(values: np.ndarray, digits: int) -> list[Any]:
+    """A nested list of rounded floats, NaN as None (JSON has no NaN)."""
+    arr = np.round(np.asarray(values, dtype=float), digits)
+    return [_rounded(row, digits) if np.ndim(row) else (None if not math.isfinite(row) else float(row))
+            for row in arr]
+
+
+def _finite(value: float) -> float | None:
+    """A float, or None for NaN / inf."""
+    return float(value) if math.isfinite(value) else None
+
+
+def isolated(rec_time: np.ndarray, poses: np.ndarray, glider: Glider, period: float, limit: float) -> bool:
+    """True if no third robot's centre comes within ``limit`` (m) of either glider robot in its bound periods."""
+    n = poses.shape[1]
+    others = [k for k in range(n) if k not in (glider.i, glider.j)]
+    if not others:
+        return True
+    t0 = float(rec_time[0])
+    in_run = (rec_time >= t0 + glider.start_period * period - 1e-9) & \
+        (rec_time < t0 + (glider.start_period + glider.lifetime_periods) * period - 1e-9)
+    xy = poses[in_run, :, :2]
+    for k in (glider.i, glider.j):
+        d = np.linalg.norm(xy[:, others, :] - xy[:, k:k + 1, :], axis=2)
+        if np.any(d < limit):
+            return False
+    return True
+
+
+def glider_record(g: Glider, rec: Recording, period: float, bl: float, isolation_w: float) -> dict[str, Any]:
+    """One glider as a JSON-ready dict (lengths in BL = W, angles in degrees)."""
+    return {
+        'i': g.i, 'j': g.j, 'class': g.glider_class.value, 'start_period': g.start_period,
+        'lifetime_periods': g.lifetime_periods, 'ongoing': g.ongoing,
+        'r_bl': _finite(g.r_mean / bl), 'theta_deg': _finite(math.degrees(g.theta_mean) % 360.0),
+        'phi_deg': _finite(math.degrees(g.phi_mean) % 360.0), 'distance_w': _finite(g.distance / bl),
+        'path_w': _finite(g.path_length / bl), 'v_com_w_per_period': _finite(g.v_com * period / bl),
+        'beta': _finite(g.beta), 'isolated': isolated(rec.time, rec.poses, g, period, isolation_w * bl),
+        'com_path_w': _rounded(g.com_path / bl, 4),
+    }
+
+
+def analyse_recording(config: SimConfig, rec: Recording, period: float, p: Mapping[str, Any]) -> dict[str, Any]:
+    """Gliders of a recording (glider analysis with contacts) plus per-trial figures and a short trajectory."""
+    bl = config.robot.body_length
+    n = rec.poses.shape[1]
+    iu = np.triu_indices(n, 1)
+    contacts = rec.contacts[:, iu[0], iu[1]]
+    gcfg = GliderConfig(period=period, r_bind=float(p['r_bind_bl']) * bl, min_periods=int(p['min_periods']),
+                        body_length=bl, width=bl)
+    analysis = analyse_gliders(rec.time, rec.poses, gcfg, contacts=contacts)
+    gliders = [glider_record(g, rec, period, bl, float(p['isolation_w'])) for g in analysis.gliders]
+    per = max(1, round(period / (config.physics.control_tick * rec.meta['sample_every'])))
+    positive = int(p['positive_periods'])
+    longest = max(gliders, key=lambda g: g['lifetime_periods'], default=None)
+    return {
+        'periods_run': (len(rec.time) - 1) / per if len(rec.time) else 0.0,
+        'trouble': rec.trouble,
+        'n_gliders': len(gliders),
+        'positive': any(g['lifetime_periods'] >= positive for g in gliders),
+        'positive_isolated': any(g['lifetime_periods'] >= positive and g['isolated'] for g in gliders),
+        'longest_periods': longest['lifetime_periods'] if longest else 0,
+        'longest_class': longest['class'] if longest else '',
+        'longest_distance_w': longest['distance_w'] if longest else None,
+        'gliders': gliders,
+        'trajectory_bl': _rounded(rec.poses[::per, :, :2] / bl, 3) if p.get('trajectory', True) else [],
+        'trajectory_dt': period,
+    }
+
+
+# ------------------------------------------------------------------ trial kinds
+
+
+def dense_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+    """P1/P2/P3: N robots densely packed, in phase (or jittered), for ``periods`` periods; its gliders."""
+    config = _config_of(p)
+    gait = make_gait(config, p['alpha_max_deg'], p['servo_speed'])
+    scene = dense_scene(config.robot, gait, n=int(p['robots']), seed=seed, phase_jitter=float(p['phase_jitter']))
+    rec = run_trial(config, scene, float(p['periods']), sample_every=int(p['sample_every']), record_contacts=True)
+    return analyse_recording(config, rec, gait.period, p)
+
+
+def pair_start(p: Mapping[str, Any], seed: int) -> tuple[float, float, float]:
+    """The pair start (r BL, theta deg, phi deg): the spec's plus seeded uniform jitter ``start_jitter``."""
+    jitter = np.asarray(p['start_jitter'], dtype=float)
+    u = np.random.default_rng(seed).uniform(-1.0, 1.0, size=3) if np.any(jitter) else np.zeros(3)
+    return (float(p['r_bl'] + jitter[0] * u[0]), float(p['theta_deg'] + jitter[1] * u[1]),
+            float(p['phi_deg'] + jitter[2] * u[2]))
+
+
+def pair_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+    """P4/P5: two robots from pair coordinates; binding at the end, travel, and the pair's gliders."""
+    config = _config_of(p)
+    gait = make_gait(config, p['alpha_max_deg'], p['servo_speed'])
+    r, theta, phi = pair_start(p, seed)
+    start = {'r0_bl': r, 'theta0_deg': theta, 'phi0_deg': phi}
+    try:
+        scene = pair_scene(config.robot, gait, r, math.radians(theta), math.radians(phi),
+                           (0.0, float(p['phase2'])))
+    except SceneError as exc:
+        return {**start, 'admissible': False, 'why': str(exc), 'trouble': '', 'gliders': []}
+    rec = run_trial(config, scene, float(p['periods']), sample_every=int(p['sample_every']), record_contacts=True)
+    out = analyse_recording(config, rec, gait.period, p)
+    bl = config.robot.body_length
+    per = max(1, round(gait.period / (config.physics.control_tick * int(p['sample_every']))))
+    touching = rec.contacts[:, 0, 1]
+    r_all = np.hypot(*(rec.poses[:, 1, :2] - rec.poses[:, 0, :2]).T) / bl
+    bound = [bool(touching[q * per:(q + 1) * per].any() or (r_all[q * per:(q + 1) * per] < p['r_bind_bl']).any())
+             for q in range(len(touching) // per)]
+    tail = 0
+    for b in reversed(bound):
+        if not b:
+            break
+        tail += 1
+    com = rec.poses[::per, :, :2].mean(axis=1) / bl
+    phi_end = (rec.poses[-1, 1, 2] - rec.poses[-1, 0, 2]) % (2.0 * math.pi)
+    out.update(start, admissible=True, bound_tail_periods=tail,
+               bound_at_end=tail >= int(p['bound_tail']),
+               late_w=float(np.linalg.norm(com[-1] - com[len(com) // 2])) if len(com) else 0.0,
+               r_end_bl=float(r_all[-1]), phi_end_deg=math.degrees(phi_end))
+    return out
+
+
+def single_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+    """P7: one robot alone (heading drawn from the seed); drift per cycle in micrometres."""
+    config = _config_of(p)
+    gait = make_gait(config, p['alpha_max_deg'], p['servo_speed'])
+    heading = float(np.random.default_rng(seed).uniform(-math.pi, math.pi))
+    a = gait.alpha_max
+    scene = Scene((RobotPlacement(0.0, 0.0, heading, a, a, gait),), name='single', seed=seed)
+    rec = run_trial(config, scene, float(p['periods']), sample_every=int(p['sample_every']))
+    per = max(1, round(gait.period / (config.physics.control_tick * int(p['sample_every']))))
+    xy = rec.poses[::per, 0, :2]
+    cycles = max(len(xy) - 1, 1)
+    steps = np.linalg.norm(np.diff(xy, axis=0), axis=1)
+    return {'heading_deg': math.degrees(heading), 'trouble': rec.trouble, 'cycles': len(xy) - 1,
+            'drift_um_per_cycle': float(np.linalg.norm(xy[-1] - xy[0]) / cycles * 1e6),
+            'step_um_per_cycle': float(steps.mean() * 1e6) if steps.size else None}
+
+
+def p6_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+    """P6: a C2 pair of the feedback robot, open loop or with impact-halt feedback (the feedback package's trial)."""
+    from smarticle_experiments.p6 import Condition, run_pair_trial
+
+    trial = run_pair_trial(Condition(float(p['alpha_max_deg']), bool(p['feedback'])), seed, float(p['periods']))
+    return {'lifetime_periods': int(trial.lifetime_periods), 'censored': bool(trial.censored),
+            'halts': len(trial.halts), 'trouble': trial.trouble,
+            'r0_bl': trial.start[0], 'theta0_deg': trial.start[1], 'phi0_deg': trial.start[2],
+            'final_r_bl': _finite(float(trial.r[-1])) if len(trial.r) else None}
+
+
+def accuracy_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+    """Run time against error: one (physics rate, solver iterations) setting on a pair and a lone robot.
+
+    Returns the pair's body-centre positions after 1 and 10 periods (BL), its mean separation r (BL),
+    the lone robot's drift per cycle (um) and the wall time per simulated second of the pair run; the
+    errors against the sweep's finest setting are computed by the report.
+    """
+    import time
+
+    physics = {**dict(p.get('physics') or {}), 'time_step': 1.0 / float(p['rate_hz']),
+               'control_tick': float(p['control_tick']), 'solver_iterations': int(p['solver_iterations'])}
+    config = make_config(str(p['preset']), physics, dict(p.get('robot') or {}))
+    gait = make_gait(config, p['alpha_max_deg'], p['servo_speed'])
+    scene = pair_scene(config.robot, gait, float(p['r_bl']), math.radians(p['theta_deg']), math.radians(p['phi_deg']),
+                       (0.0, float(p['phase2'])))
+    every = max(1, round(0.05 / config.physics.control_tick))
+    start = time.perf_counter()
+    rec = run_trial(config, scene, float(p['periods']), sample_every=every)
+    wall = time.perf_counter() - start
+    bl = config.robot.body_length
+    out: dict[str, Any] = {'trouble': rec.trouble, 'wall_per_sim_s': wall / max(float(rec.time[-1]), 1e-12)}
+    for mark in (1, 10):
+        k = int(np.argmin(np.abs(rec.time - mark * gait.period)))
+        out[f'xy{mark}_bl'] = _rounded(rec.poses[k, :, :2] / bl, 7) if abs(rec.time[k] - mark * gait.period) < 0.06 \
+            else None
+    out['r_mean_bl'] = float(np.mean(np.hypot(*(rec.poses[:, 1, :2] - rec.poses[:, 0, :2]).T))) / bl
+    single = single_trial({**p, 'physics': physics, 'periods': p['single_periods'], 'sample_every': 1}, seed)
+    out['drift_um_per_cycle'] = single['drift_um_per_cycle']
+    if single['trouble']:
+        out['trouble'] = '; '.join(t for t in (out['trouble'], single['trouble']) if t)
+    return out
+
+
+# ------------------------------------------------------------------ registry
+
+
+@dataclass(frozen=True)
+class TrialKind:
+    """A trial kind: its function, its parameters with defaults, and the report sections it supports."""
+
+    function: TrialFunction
+    defaults: Mapping[str, Any]
+    description: str
+
+
+_COMMON: dict[str, Any] = {'preset': 'small', 'physics': {}, 'robot': {}, 'periods': 300.0,
+                           'alpha_max_deg': 90.0, 'servo_speed': None}
+_GLIDERS: dict[str, Any] = {'min_periods': 30, 'r_bind_bl': 1.6, 'isolation_w': 2.0, 'positive_periods': 100,
+                            'trajectory': True}
+
+KINDS: dict[str, TrialKind] = {
+    'dense': TrialKind(dense_trial, {**_COMMON, **_GLIDERS, 'robots': 7, 'phase_jitter': 0.0, 'sample_every': 4},
+                       'N robots densely packed (P1, P2, P3)'),
+    'pair': TrialKind(pair_trial, {**_COMMON, **_GLIDERS, 'periods': 75.0, 'r_bl': 1.3, 'theta_deg': 0.0,
+                                   'phi_deg': 180.0, 'phase2': 0.0, 'start_jitter': [0.0, 0.0, 0.0],
+                                   'sample_every': 2, 'min_periods': 10, 'bound_tail': 5},
+                      'two robots from pair coordinates (P4 basin scan, P5 alpha_max sweep)'),
+    'single': TrialKind(single_trial, {**_COMMON, 'periods': 20.0, 'sample_every': 1},
+                        'one robot alone, drift per cycle (P7)'),
+    'p6': TrialKind(p6_trial, {'periods': 100.0, 'alpha_max_deg': 90.0, 'feedback': False},
+                    'C2 pair of the feedback robot, open loop or feedback (P6; smarticle_experiments.p6)'),
+    'accuracy': TrialKind(accuracy_trial, {**_COMMON, 'periods': 20.0, 'single_periods': 10.0, 'rate_hz': 240.0,
+                                           'control_tick': 1.0 / 60.0, 'solver_iterations': 50, 'r_bl': 1.4,
+                                           'theta_deg': 60.0, 'phi_deg': 180.0, 'phase2': 0.5},
+                          'run time against error of one physics setting (pair + lone robot)'),
+}
+
+
+def resolve_kind(kind: str) -> TrialKind | None:
+    """The built-in kind named ``kind``, or None for a user's ``module:function`` kind."""
+    if kind in KINDS:
+        return KINDS[kind]
+    if ':' in kind:
+        return None
+    raise SpecError(f'kind {kind!r} is unknown; choose one of {", ".join(KINDS)} or give module:function')
+
+
+def trial_function(kind: str) -> TrialFunction:
+    """The function that runs a trial of ``kind`` (a built-in name or an importable ``module:function``)."""
+    known = resolve_kind(kind)
+    if known is not None:
+        return known.function
+    import importlib
+
+    module, _, name = kind.partition(':')
+    try:
+        func = getattr(importlib.import_module(module), name)
+    except (ImportError, AttributeError) as exc:
+        raise SpecError(f'kind {kind!r}: cannot import {name} from {module} ({exc})') from None
+    if not callable(func):
+        raise SpecError(f'kind {kind!r}: {name} is not callable')
+    return func
+
+
+def validate_params(kind: str, params: Mapping[str, Any]) -> None:
+    """Raise SpecError (ValueError) if the merged params of a built-in kind make no valid config or gait."""
+    if kind not in KINDS or kind == 'p6':
+        return
+    try:
+        config = make_config(str(params['preset']), dict(params.get('physics') or {}), dict(params.get('robot') or {}))
+        if kind == 'accuracy':
+            make_config(str(params['preset']), {**dict(params.get('physics') or {}),
+                                                'time_step': 1.0 / float(params['rate_hz']),
+                                                'control_tick': float(params['control_tick']),
+                                                'solver_iterations': int(params['solver_iterations'])}, {})
+        make_gait(config, params['alpha_max_deg'], params['servo_speed'])
+    except SpecError:
+        raise
+    except (ValueError, TypeError, KeyError) as exc:
+        raise SpecError(str(exc).split('\n')[0]) from None
+
+
+def ensemble_msd(paths: Sequence[Sequence[Sequence[float | None]]], max_lag: int | None = None
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """The tracking package's ensemble MSD (``<x^2> - <x>^2``) of per-period paths (W): (lags, msd W^2)."""
+    arrays = [np.array([[math.nan if v is None else v for v in row] for row in path], dtype=float)
+              for path in paths if len(path) >= 2]
+    if not arrays:
+        return np.empty(0), np.empty(0)
+    result = msd(arrays, max_lag=max_lag, subtract_mean=True)
+    return result.lags.astype(float), result.msd
+
+
+def msd_beta(lags: np.ndarray, values: np.ndarray) -> float:
+    """The tracking package's power-law fit of an MSD curve (lags in periods); NaN if it cannot be fitted."""
+    from smarticle_tracking.errors import MsdFitError
+    from smarticle_tracking.msd import MsdResult
+
+    if lags.size < 2:
+        return math.nan
+    result = MsdResult(lags.astype(np.intp), values, np.ones(lags.size, dtype=np.intp))
+    try:
+        return fit_msd_exponent(result).beta
+    except MsdFitError:
+        return math.nan
+
+
+def code_versions() -> dict[str, str]:
+    """Versions of the libraries a trial's numbers depend on (pybullet, numpy) in this process."""
+    from importlib import metadata
+
+    out = {'numpy': np.__version__}
+    try:
+        out['pybullet'] = metadata.version('pybullet')
+    except metadata.PackageNotFoundError:
+        out['pybullet'] = 'unknown'
+    return out

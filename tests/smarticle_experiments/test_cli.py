@@ -1,0 +1,66 @@
+"""The command line: bad input is one line, exit code 2, nothing written."""
+
+from __future__ import annotations
+
+import socket
+from pathlib import Path
+
+import pytest
+import yaml
+
+from smarticle_experiments.cli import main
+
+
+def spec_file(tmp_path: Path, **data: object) -> str:
+    """Write a spec YAML (a new file each call) and return its path."""
+    base = {'name': 'tiny', 'kind': 'dense', 'periods': 2, 'params': {'robots': 3}, 'seeds': 2}
+    path = tmp_path / f'tiny{len(list(tmp_path.glob("*.yaml")))}.yaml'
+    path.write_text(yaml.safe_dump({**base, **data}))
+    return str(path)
+
+
+def free_port() -> int:
+    """A local TCP port nobody listens on."""
+    with socket.socket() as sock:
+        sock.bind(('127.0.0.1', 0))
+        return sock.getsockname()[1]
+
+
+@pytest.mark.parametrize('case', ['unknown key', 'zero trials', 'negative periods', 'empty grid', 'zero seeds',
+                                  'no such spec', 'dead scheduler'])
+def test_bad_input_is_one_line_exit_2_and_writes_nothing(case: str, tmp_path: Path,
+                                                         capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / 'out'
+    argv = {
+        'unknown key': ['run', spec_file(tmp_path, colour='red')],
+        'zero trials': ['run', spec_file(tmp_path), '--trials', '0'],
+        'negative periods': ['run', spec_file(tmp_path), '--periods', '-3'],
+        'empty grid': ['run', spec_file(tmp_path, grid={'alpha_max_deg': []})],
+        'zero seeds': ['run', spec_file(tmp_path, seeds=0)],
+        'no such spec': ['run', 'p99'],
+        'dead scheduler': ['run', spec_file(tmp_path), '--scheduler', f'tcp://127.0.0.1:{free_port()}'],
+    }[case]
+    try:
+        code = main([*argv, '--out', str(out), '--no-progress'])
+    except SystemExit as exc:   # argparse's own refusals
+        code = int(exc.code or 0)
+    err = capsys.readouterr().err.strip()
+    assert code == 2
+    assert len(err.splitlines()) == 1 and err.startswith('smarticle-experiments: error:')
+    cause = {'unknown key': 'colour', 'zero trials': '--trials', 'negative periods': '--periods',
+             'empty grid': 'grid.alpha_max_deg', 'zero seeds': 'seeds', 'no such spec': 'p99',
+             'dead scheduler': 'does not answer'}[case]
+    assert cause in err
+    assert not out.exists()
+
+
+def test_list_names_the_shipped_experiments(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(['list']) == 0
+    listed = capsys.readouterr().out
+    for name in ('p1', 'p4', 'p5', 'p6', 'p7', 'accuracy'):
+        assert f'\n{name} ' in '\n' + listed
+
+
+def test_report_of_a_spec_never_run_says_so(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(['report', spec_file(tmp_path), '--out', str(tmp_path / 'out')]) == 2
+    assert 'run it first' in capsys.readouterr().err

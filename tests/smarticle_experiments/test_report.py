@@ -1,0 +1,77 @@
+"""Reports from stored records (no sim): paper-against-sim rows, intervals, trials left out are listed."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from smarticle_experiments.report import write_report
+from smarticle_experiments.spec import spec_from_mapping
+from smarticle_experiments.store import ResultStore
+
+CODE = {'smarticle_experiments': '0', 'commit': 'abc', 'numpy': '1', 'pybullet': '1'}
+
+
+def glider(life: int, cls: str, phi: float, ongoing: bool = False, distance: float = 2.9) -> dict[str, Any]:
+    """A glider record as the dense kind returns it."""
+    return {'i': 0, 'j': 1, 'class': cls, 'start_period': 0, 'lifetime_periods': life, 'ongoing': ongoing,
+            'r_bl': 1.3 if cls == 'C1' else 1.5, 'theta_deg': 10.0, 'phi_deg': phi, 'distance_w': distance,
+            'path_w': distance, 'v_com_w_per_period': 0.01, 'beta': 1.8, 'isolated': True,
+            'com_path_w': [[0.0, 0.0], [0.01, 0.0], [0.02, 0.0]]}
+
+
+def dense_result(seed: int) -> dict[str, Any]:
+    """A synthetic P1 trial: positive for seeds 0..96 (97 of 151), a C1 and a C2 glider each."""
+    positive = seed < 97
+    gliders = [glider(300 if positive else 40, 'C1', 180.0, ongoing=positive, distance=2.8 + 0.2 * (seed % 2)),
+               glider(60 + seed % 40, 'C2', 5.0)]
+    return {'periods_run': 300.0, 'trouble': '', 'n_gliders': 2, 'positive': positive, 'positive_isolated': positive,
+            'longest_periods': 300 if positive else 99, 'longest_class': 'C1', 'longest_distance_w': 2.9,
+            'gliders': gliders, 'trajectory_bl': [[[0.0, 0.0], [1.0, 0.0]], [[0.1, 0.0], [1.1, 0.0]]],
+            'trajectory_dt': 1.6}
+
+
+def test_p1_report_puts_the_paper_inside_the_sims_intervals_and_lists_what_it_left_out(tmp_path: Path) -> None:
+    spec = spec_from_mapping({'name': 'p1', 'description': 'synthetic', 'kind': 'dense', 'seeds': 153,
+                              'report': ['p1', 'trajectories', 'configurations', 'lifetimes'],
+                              'paper': {'fraction_bound': 0.64, 'distance_w': 2.9}})
+    trials = spec.trials(CODE)
+    store = ResultStore(tmp_path / 'p1')
+    for t in trials[:151]:
+        store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': {}, 'status': 'ok',
+                     'result': dense_result(t.seed)})
+    bad = trials[151]
+    store.write({'key': bad.key, 'kind': bad.kind, 'seed': bad.seed, 'point': {}, 'status': 'failed',
+                 'error_kind': 'trial', 'error': 'RuntimeError: boom', 'traceback': 'Traceback ...'})
+    report = write_report(spec, trials + [], store, CODE).read_text()
+    rows = {line.split(' | ')[0].lstrip('| '): line for line in report.splitlines() if line.startswith('| P')}
+    fraction = rows['P1 trials with a pair bound >= 100 periods']
+    assert '64.2% [56.3%, 71.4%] (97/151)' in fraction and '| Wilson |' in fraction and '| yes |' in fraction
+    assert '| yes |' in rows['P1 distance travelled by those gliders (W)']
+    assert '| yes |' in rows['P2 both modes present']
+    assert 'Kaplan-Meier' in rows['P3 C2 median lifetime (periods, Kaplan-Meier)']
+    assert '151 used, 0 ended in sim trouble, 1 failed, 1 not run yet' in report
+    assert 'RuntimeError: boom' in report
+    for png in ('p1_longest', 'trajectories', 'configurations', 'lifetimes'):
+        assert (store.folder / 'report-p1' / f'{png}.png').stat().st_size > 0
+
+
+def test_trials_in_sim_trouble_are_counted_and_listed_not_used(tmp_path: Path) -> None:
+    spec = spec_from_mapping({'name': 'drift', 'kind': 'single', 'seeds': 4, 'report': ['drift'],
+                              'paper': {'drift_um': 75.0}})
+    trials = spec.trials(CODE)
+    store = ResultStore(tmp_path / 'drift')
+    for t, drift, trouble in zip(trials, [70.0, 74.0, 78.0, 9999.0], ['', '', '', 'sim trouble: robot 0 flipped'],
+                                 strict=True):
+        store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': {}, 'status': 'ok',
+                     'result': {'drift_um_per_cycle': drift, 'trouble': trouble}})
+    report = write_report(spec, trials, store, CODE).read_text()
+    assert '3 used, 1 ended in sim trouble' in report and 'robot 0 flipped' in report
+    assert '| 90 | 3 | 74.0 [' in report       # the trouble trial's 9999 is not in the mean
+
+
+def test_every_section_a_spec_may_name_is_drawn() -> None:
+    from smarticle_experiments.report import SECTIONS
+    from smarticle_experiments.spec import REPORT_SECTIONS
+
+    assert set(SECTIONS) == set(REPORT_SECTIONS)

@@ -1,0 +1,83 @@
+"""Specs as data: the shipped specs load, bad specs are refused naming the field, keys are stable."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import yaml
+
+from smarticle_experiments.errors import SpecError
+from smarticle_experiments.spec import builtin_names, load_spec, spec_from_mapping
+
+CODE = {'smarticle_experiments': '0', 'commit': 'abc', 'numpy': '1', 'pybullet': '1'}
+TINY = {'name': 'tiny', 'kind': 'dense', 'periods': 2, 'params': {'robots': 3}, 'seeds': 2}
+
+
+def test_every_shipped_spec_loads_and_expands() -> None:
+    names = builtin_names()
+    assert {'p1', 'p2', 'p3', 'p4', 'p5', 'p6', 'p7', 'accuracy'} <= set(names)
+    counts = {name: len(load_spec(name).trials(CODE)) for name in names}
+    assert counts['p1'] == 151
+    assert counts['p4'] == 2 * 12 * 12
+    assert counts['p6'] == (3 + 1) * 20          # two grid blocks: open loop 70/80/90, feedback 90
+
+
+def test_p2_and_p3_reuse_the_p1_trials() -> None:
+    keys = {name: [t.key for t in load_spec(name).trials(CODE)] for name in ('p1', 'p2', 'p3')}
+    assert keys['p1'] == keys['p2'] == keys['p3']
+    assert load_spec('p2').store == load_spec('p3').store == 'p1'
+
+
+def test_a_users_yaml_file_is_a_spec(tmp_path: Path) -> None:
+    path = tmp_path / 'mine.yaml'
+    path.write_text(yaml.safe_dump({**TINY, 'grid': {'alpha_max_deg': [60, 90], 'physics.solver_iterations': [5]}}))
+    spec = load_spec(str(path))
+    trials = spec.trials(CODE)
+    assert len(trials) == 4
+    assert {t.params['alpha_max_deg'] for t in trials} == {60.0, 90.0}
+    assert all(t.params['physics'] == {'solver_iterations': 5} for t in trials)
+
+
+@pytest.mark.parametrize(('change', 'named'), [
+    ({'gird': {}}, "'gird'"),
+    ({'params': {'robotz': 3}}, 'params.robotz'),
+    ({'analysis': {'min_period': 3}}, 'analysis.min_period'),
+    ({'physics': {'time_stepp': 0.01}}, 'physics.time_stepp'),
+    ({'grid': {'theta_deg': []}}, 'grid.theta_deg'),
+    ({'grid': []}, 'grid'),
+    ({'grid': {'nonsense': [1]}}, 'grid.nonsense'),
+    ({'seeds': 0}, 'seeds'),
+    ({'seeds': -3}, 'seeds'),
+    ({'seeds': []}, 'seeds'),
+    ({'seeds': {'count': 0}}, 'seeds.count'),
+    ({'periods': 0}, 'periods'),
+    ({'periods': -5}, 'periods'),
+    ({'kind': 'nope'}, 'nope'),
+    ({'report': ['figure9']}, 'figure9'),
+    ({'physics': {'contact_erp': 2.0}}, 'contact_erp'),
+])
+def test_bad_specs_are_refused_naming_the_field(change: dict, named: str) -> None:
+    with pytest.raises(SpecError, match=named.replace('.', r'\.').replace('(', r'\(')):
+        spec_from_mapping({**TINY, **change})
+
+
+def test_trial_overrides_are_checked() -> None:
+    spec = spec_from_mapping(TINY)
+    with pytest.raises(SpecError, match='trials'):
+        spec.with_seed_count(0)
+    with pytest.raises(SpecError, match='periods'):
+        spec.with_periods(-1.0)
+    assert len(spec.with_seed_count(5).trials(CODE)) == 5
+
+
+def test_keys_follow_settings_seed_and_code_version() -> None:
+    spec = spec_from_mapping(TINY)
+    first = [t.key for t in spec.trials(CODE)]
+    assert first == [t.key for t in spec_from_mapping(TINY).trials(CODE)]     # stable
+    assert len(set(first)) == 2                                                # one per seed
+    assert first != [t.key for t in spec.trials({**CODE, 'commit': 'def'})]    # code version
+    other = spec_from_mapping({**TINY, 'physics': {'solver_iterations': 7}})
+    assert set(first).isdisjoint(t.key for t in other.trials(CODE))            # settings
+    whole = spec_from_mapping({**TINY, 'params': {'robots': 3, 'alpha_max_deg': 90}})
+    assert first == [t.key for t in whole.trials(CODE)]                        # 90 and 90.0 hash alike

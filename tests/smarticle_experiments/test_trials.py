@@ -1,0 +1,66 @@
+"""Each built-in trial kind runs a tiny trial and returns its documented fields (guards the imports of the
+other packages, which live in trials.py only); the isolation rule of gliders."""
+
+from __future__ import annotations
+
+import json
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from smarticle_experiments.spec import apply_point
+from smarticle_experiments.trials import KINDS, isolated
+
+
+def params(kind: str, **changes: object) -> dict:
+    """The kind's defaults with changes."""
+    return apply_point(dict(KINDS[kind].defaults), changes)
+
+
+@pytest.mark.parametrize(('kind', 'changes', 'fields'), [
+    ('dense', {'robots': 3, 'periods': 2.0, 'min_periods': 1}, {'gliders', 'positive', 'positive_isolated',
+                                                                 'trajectory_bl', 'trouble', 'periods_run'}),
+    ('pair', {'periods': 2.0, 'min_periods': 1}, {'admissible', 'bound_at_end', 'bound_tail_periods', 'r_end_bl',
+                                                 'gliders', 'trouble'}),
+    ('single', {'periods': 2.0}, {'drift_um_per_cycle', 'trouble', 'cycles'}),
+    ('p6', {'periods': 2.0, 'feedback': True}, {'lifetime_periods', 'censored', 'halts', 'trouble'}),
+    ('accuracy', {'periods': 2.0, 'single_periods': 2.0}, {'wall_per_sim_s', 'r_mean_bl', 'drift_um_per_cycle',
+                                                          'xy1_bl', 'trouble'}),
+])
+def test_every_kind_runs_a_tiny_trial(kind: str, changes: dict, fields: set[str]) -> None:
+    result = KINDS[kind].function(params(kind, **changes), 1)
+    assert fields <= set(result)
+    assert result['trouble'] == ''
+    json.dumps(result, allow_nan=True)   # JSON-ready (NaN becomes null in the store)
+
+
+def test_a_pair_start_that_overlaps_is_inadmissible_not_an_error() -> None:
+    result = KINDS['pair'].function(params('pair', r_bl=0.3, periods=2.0), 0)
+    assert result['admissible'] is False and 'overlap' in result['why']
+
+
+def test_the_seed_jitters_the_pair_start_only_when_asked() -> None:
+    from smarticle_experiments.trials import pair_start
+
+    p = params('pair')
+    assert pair_start(p, 1) == pair_start(p, 2) == (1.3, 0.0, 180.0)
+    jittered = params('pair', start_jitter=[0.04, 4.0, 4.0])
+    a, b = pair_start(jittered, 1), pair_start(jittered, 2)
+    assert a != b and a == pair_start(jittered, 1)
+    assert abs(a[0] - 1.3) <= 0.04 and abs(a[1]) <= 4.0 and abs(a[2] - 180.0) <= 4.0
+
+
+def test_isolated_means_no_third_robot_within_the_limit_during_the_bound_periods() -> None:
+    times = np.arange(0.0, 4.0, 0.5)                       # period 1 s: periods 0..3, two frames each
+    poses = np.zeros((times.size, 3, 3))
+    poses[:, 1, 0] = 0.06                                  # robots 0 and 1 side by side
+    poses[:, 2, 0] = 1.0                                   # robot 2 far away ...
+    poses[6:, 2, 0] = 0.1                                  # ... until period 3
+    glider = SimpleNamespace(i=0, j=1, start_period=0, lifetime_periods=3)
+    assert isolated(times, poses, glider, 1.0, 0.108)      # periods 0-2: alone
+    longer = SimpleNamespace(i=0, j=1, start_period=0, lifetime_periods=4)
+    assert not isolated(times, poses, longer, 1.0, 0.108)  # period 3: robot 2 within 2 W of robot 1
+    assert isolated(times, poses[:, :2], longer, 1.0, 0.108)   # no third robot at all
+    assert math.isfinite(poses.sum())
