@@ -10,7 +10,7 @@ everything created in the constructor) and started with ``run_node``::
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from typing import Any
+from typing import Any, TypeVar
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -24,6 +24,8 @@ from .params import ParameterError, ParamSpec
 #: Diagnostic levels (diagnostic_msgs/DiagnosticStatus).
 OK, WARN, ERROR = 0, 1, 2
 
+Config = TypeVar('Config')
+
 
 def declare_and_read(node: Any, specs: tuple[ParamSpec, ...]) -> dict[str, Any]:
     """Declare ``specs`` on an rclpy node and return their checked values by name (ParameterError if bad)."""
@@ -33,6 +35,21 @@ def declare_and_read(node: Any, specs: tuple[ParamSpec, ...]) -> dict[str, Any]:
         param = node.declare_parameter(spec.name, spec.default, descriptor)
         values[spec.name] = spec.check(param.value, f'node {node.get_name()} parameter')
     return values
+
+
+def read_config(node: Any, specs: tuple[ParamSpec, ...], build: Callable[[dict[str, Any]], Config]) -> Config:
+    """The one way a node gets its settings: declare ``specs``, check the values, ``build`` the frozen config.
+
+    A value of the wrong type or out of range, or a ValueError of ``build`` (settings that contradict
+    each other), becomes a ParameterError that names the node; ``run_node`` turns it into exit code 2.
+    """
+    values = declare_and_read(node, specs)
+    try:
+        return build(values)
+    except ParameterError:
+        raise
+    except ValueError as err:
+        raise ParameterError(f'node {node.get_name()}: {err}') from err
 
 
 class DiagnosticsPublisher:

@@ -14,8 +14,8 @@ from rclpy.time import Time
 
 from smarticle_common import topics
 from smarticle_common.facts import GAIT_PERIOD, SERVO_SPEED
-from smarticle_common.gait import GaitCommand, GaitConfig, GaitError, SquareGait
-from smarticle_common.node import declare_and_read, run_node
+from smarticle_common.gait import GaitCommand, GaitConfig, SquareGait
+from smarticle_common.node import read_config, run_node
 from smarticle_common.params import ParamSpec, ParameterError
 
 NODE_NAME = 'gait'
@@ -39,12 +39,9 @@ PARAMS: tuple[ParamSpec, ...] = (
 
 
 def config_from_params(values: dict[str, Any]) -> GaitConfig:
-    """Build the gait config from checked parameter values (degrees at this edge only)."""
-    try:
-        return GaitConfig.from_degrees(values['alpha_max_deg'], values['period'],
-                                       values['servo_speed'], values['phase'])
-    except GaitError as err:
-        raise ParameterError(f'node {NODE_NAME}: {err}') from err
+    """Build the gait config from checked parameter values (degrees at this edge only; GaitError if bad)."""
+    return GaitConfig.from_degrees(values['alpha_max_deg'], values['period'], values['servo_speed'],
+                                   values['phase'])
 
 
 class GaitNode(Node):
@@ -52,9 +49,9 @@ class GaitNode(Node):
 
     def __init__(self) -> None:
         super().__init__(NODE_NAME)
-        values = declare_and_read(self, PARAMS)
+        config, values = read_config(self, PARAMS, lambda v: (config_from_params(v), v))
         self.robot_id: int = values['robot_id']
-        self.gait = SquareGait(config_from_params(values))
+        self.gait = SquareGait(config)
         self.heartbeat = Time(seconds=values['heartbeat']).nanoseconds
         self.autostart: bool = values['autostart']
         self.start_at: float = values['start_at']

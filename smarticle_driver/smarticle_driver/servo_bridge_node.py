@@ -23,7 +23,7 @@ from rclpy.node import Node
 
 from smarticle_common import topics
 from smarticle_driver.errors import DriverError
-from smarticle_common.node import DiagnosticsPublisher, declare_and_read, run_node
+from smarticle_common.node import DiagnosticsPublisher, read_config, run_node
 from smarticle_common.params import ParameterError
 from smarticle_driver.servo_bridge_core import NODE_NAME, PARAMS, BridgeConfig, ServoBridgeCore, StepResult
 
@@ -37,8 +37,7 @@ class ServoBridgeNode(Node):
 
     def __init__(self) -> None:
         super().__init__(NODE_NAME)
-        values = declare_and_read(self, PARAMS)
-        self.config = BridgeConfig.from_values(values)
+        self.config = read_config(self, PARAMS, BridgeConfig.from_values)
         self.core = ServoBridgeCore.from_config(self.config)
         self._warned: dict[str, tuple[float, int]] = {}
         self._warned_lock = threading.Lock()

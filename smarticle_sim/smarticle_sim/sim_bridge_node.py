@@ -22,7 +22,7 @@ from rclpy.node import Node
 from rclpy.time import Time
 from smarticle_common import topics
 from smarticle_common.messages import pose_message
-from smarticle_common.node import DiagnosticsPublisher, declare_and_read, run_node
+from smarticle_common.node import DiagnosticsPublisher, read_config, run_node
 from smarticle_common.params import ParameterError
 
 from .bridge import NODE_NAME, PARAMS, BridgeSettings, SimBridgeCore
@@ -41,9 +41,8 @@ class SimBridgeNode(Node):
 
     def __init__(self) -> None:
         super().__init__(NODE_NAME)
-        values = declare_and_read(self, PARAMS)
+        self.settings = read_config(self, PARAMS, BridgeSettings.from_values)
         try:
-            self.settings = BridgeSettings.from_values(values)
             self.core = SimBridgeCore(self.settings)
         except (SimError, ValueError) as err:
             raise ParameterError(f'node {NODE_NAME}: {err}') from err

@@ -22,7 +22,7 @@ from rclpy.node import Node
 from rclpy.time import Time
 from smarticle_common import topics
 from smarticle_common.messages import planar_poses
-from smarticle_common.node import OK, DiagnosticsPublisher, declare_and_read, run_node
+from smarticle_common.node import OK, DiagnosticsPublisher, read_config, run_node
 from smarticle_common.params import ParameterError
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
@@ -78,11 +78,7 @@ class GliderMonitorNode(Node):
 
     def __init__(self) -> None:
         super().__init__(MONITOR_NODE)
-        values = declare_and_read(self, MONITOR_PARAMS)
-        try:
-            self.settings = monitor_settings(values)
-        except ValueError as err:
-            raise ParameterError(f'node {MONITOR_NODE}: {err}') from err
+        self.settings = read_config(self, MONITOR_PARAMS, monitor_settings)
         self.monitor = GliderMonitor(self.settings.glider, self.settings.t0, self.settings.history)
         qos = {key: topics.qos_profile(topics.spec_of(key).qos) for key in topics.BY_KEY}
         self.gliders_pub = self.create_publisher(DiagnosticArray, topics.topic('gliders'), qos['gliders'])

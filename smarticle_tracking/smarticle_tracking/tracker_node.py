@@ -20,7 +20,7 @@ from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.node import Node
 from smarticle_common import topics
 from smarticle_common.messages import pose_message
-from smarticle_common.node import ERROR, OK, DiagnosticsPublisher, declare_and_read, run_node
+from smarticle_common.node import ERROR, OK, DiagnosticsPublisher, read_config, run_node
 from smarticle_common.params import ParameterError
 
 from .errors import CalibrationError, FrameEncodingError, FrameSizeError, TrackerError
@@ -33,11 +33,7 @@ class TrackerNode(Node):
 
     def __init__(self) -> None:
         super().__init__(TRACKER_NODE)
-        values = declare_and_read(self, TRACKER_PARAMS)
-        try:
-            self.config = tracker_config(values)
-        except ValueError as err:
-            raise ParameterError(f'node {TRACKER_NODE}: {err}') from err
+        self.config, values = read_config(self, TRACKER_PARAMS, lambda v: (tracker_config(v), v))
         self.tracker: TagTracker | None = None
         self.calibration_problem = ''
         try:
