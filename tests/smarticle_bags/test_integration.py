@@ -78,7 +78,7 @@ def test_killed_recorder_leaves_readable_bag(nodes: NodeProcesses, ros_node: Cal
     assert reader.problems
     stamps = [msg.header.stamp.sec for _, msg in reader.decoded([TOPIC])]
     assert stamps == list(range(60))
-    report = reindex(out)
+    report = reindex(out, replace=True)
     assert report.repaired
     assert BagReader(out, strict=True).info.message_count == 60
 

@@ -2,7 +2,8 @@
 
 Decoding uses ``mcap_ros2``'s decoder on the ``ros2msg`` schemas stored in the file, so bags made by
 rosbag2 and by this package read the same way, with no rclpy or message packages needed. Damaged
-files are salvaged (every complete chunk is read) with a warning, or rejected with ``strict=True``.
+files are salvaged (every intact chunk is read, every chunk's CRC checked as it is read) with a warning,
+or rejected with ``strict=True`` (which checks every chunk when the bag is opened).
 """
 
 from __future__ import annotations
@@ -71,8 +72,9 @@ def check_topics(requested: Iterable[str], available: Iterable[str], where: str)
 class BagReader:
     """A bag opened for reading; ``info`` is its metadata, ``messages`` and ``decoded`` its content."""
 
-    def __init__(self, path: Path | str, strict: bool = False) -> None:
+    def __init__(self, path: Path | str, strict: bool = False, verify: bool | None = None) -> None:
         self.path = Path(path)
+        check = strict if verify is None else verify
         if not self.path.exists():
             raise BagNotFoundError(f'bag {self.path} does not exist')
         if self.path.is_dir():
@@ -87,13 +89,18 @@ class BagReader:
                                     f'{", ".join(missing)}; run "smarticle-bag reindex {self.path}"')
             if not paths:
                 raise MetadataError(f'{self.path}: metadata.yaml lists no storage files')
-            self.scans = [mcapfile.scan(p) for p in paths]
+            self.scans = [mcapfile.scan(p, check) for p in paths]
         elif self.path.suffix == '.mcap':
-            self.scans = [mcapfile.scan(self.path)]
+            self.scans = [mcapfile.scan(self.path, check)]
             self.info = info_from_scans(self.scans)
         else:
             raise BagError(f'{self.path} is neither a bag folder nor an .mcap file')
         for result in self.scans:
+            encodings = {c.message_encoding for c in result.channels.values()}
+            if encodings and 'cdr' not in encodings:
+                raise CorruptBagError(
+                    f'{result.path}: an MCAP file of profile {result.profile or "(none)"!r} with '
+                    f'{", ".join(sorted(encodings))} messages, not a ROS 2 bag (profile ros2, cdr messages)')
             if result.profile not in ('ros2', ''):
                 _LOG.warning('%s: mcap profile is %r, not ros2', result.path, result.profile)
         if self.problems:
