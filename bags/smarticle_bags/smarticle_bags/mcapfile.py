@@ -85,6 +85,7 @@ class ChunkRef:
     records_offset: int = 0
     records_length: int = 0
     index_counts: dict[int, int] = field(default_factory=dict)
+    index_records: dict[int, tuple[int, int, int]] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -136,6 +137,7 @@ class McapScan:
     problems: list[str] = field(default_factory=list)
     damaged: list[DamagedChunk] = field(default_factory=list)
     chunk_index_times: dict[int, tuple[int, int]] = field(default_factory=dict)
+    trusted: set[tuple[str, int]] = field(default_factory=set)
 
     @property
     def message_count(self) -> int:
@@ -309,8 +311,14 @@ def chunk_messages(result: McapScan, ref: ChunkRef, data: bytes) -> list[Message
                     _stream(data[at:at + length]))
             except RECORD_ERRORS as err:
                 raise ChunkDamaged(f'damaged {_NAMES[opcode]} record in the chunk data ({err})') from None
-            table: dict[int, Any] = result.schemas if opcode == Opcode.SCHEMA else result.channels
-            table.setdefault(record.id, record)
+            kind = 'schemas' if opcode == Opcode.SCHEMA else 'channels'
+            if (kind, record.id) not in result.trusted:  # a copy inside a chunk passed the chunk's CRC
+                table: dict[int, Any] = getattr(result, kind)
+                if record.id in table and table[record.id] != record:
+                    result.note(f'{_NAMES[opcode]} id {record.id}: the copy in the chunk at byte {ref.offset} '
+                                f'differs from the one outside; using the chunk\'s (CRC-checked)')
+                table[record.id] = record
+                result.trusted.add((kind, record.id))
     return messages
 
 
@@ -455,6 +463,7 @@ class _Walker:
                 raise McapError(f'{records_length} bytes of index entries do not fit')
             if self.last_chunk is not None and not self.in_summary:
                 self.last_chunk.index_counts[channel_id] = records_length // 16
+                self.last_chunk.index_records[channel_id] = (offset, offset + 15, records_length)
         elif opcode == Opcode.CHUNK_INDEX:
             start, end, chunk_offset = struct.unpack_from('<QQQ', self.buf, offset + 9)
             if length < 24 + 8 + 4:
@@ -513,9 +522,12 @@ class _Walker:
             for record_id, (at, record) in self.summary[kind].items():
                 if record_id not in table:
                     table[record_id] = record
+                    if self.summary_ok:
+                        result.trusted.add((kind, record_id))
                 elif table[record_id] != record:
                     if self.summary_ok:
                         table[record_id] = record  # covered by a CRC that holds
+                        result.trusted.add((kind, record_id))
                     self.problem(f'{_NAMES[Opcode.SCHEMA if kind == "schemas" else Opcode.CHANNEL]} '
                                  f'record at byte {at} (summary) differs from the data section\'s copy '
                                  f'(id {record_id}); using the {"summary" if self.summary_ok else "first"} '
@@ -561,14 +573,29 @@ def scan(path: Path, verify: bool = False) -> McapScan:
     return result
 
 
+def require_ros2(result: McapScan) -> None:
+    """Raise CorruptBagError if the file holds messages, but none in ROS 2's cdr encoding."""
+    encodings = {c.message_encoding for c in result.channels.values()}
+    if encodings and 'cdr' not in encodings:
+        raise CorruptBagError(
+            f'{result.path}: an MCAP file of profile {result.profile or "(none)"!r} with '
+            f'{", ".join(sorted(encodings))} messages, not a ROS 2 bag (profile ros2, cdr messages)')
+
+
 def _count_by_reading(handle: Any, result: McapScan, statistics: Statistics | None) -> None:
     """Check every chunk and count the readable messages (the summary is not used)."""
     counts: Counter[int] = Counter()
     lo, hi = 2**64, -1
     for ref in list(result.chunks):
-        messages = load_chunk(handle, ref, result)
-        if messages is None:
+        data = read_chunk(handle, result, ref)
+        if data is None:
             continue
+        try:
+            messages = chunk_messages(result, ref, data)
+        except ChunkDamaged as err:
+            result.mark_damaged(ref, str(err))
+            continue
+        _check_index(handle, result, ref, data)
         if messages:
             first = min(m.log_time for m in messages)
             last = max(m.log_time for m in messages)
@@ -595,6 +622,27 @@ def _count_by_reading(handle: Any, result: McapScan, statistics: Statistics | No
         if statistics.message_count != sum(counts.values()):
             result.note(f'the Statistics record says {statistics.message_count} messages, the chunks hold '
                         f'{sum(counts.values())}')
+
+
+def _check_index(handle: Any, result: McapScan, ref: ChunkRef, data: bytes) -> None:
+    """Compare the message index records of a chunk with the messages it holds; note any mismatch."""
+    if not ref.index_records:
+        return
+    actual: dict[int, list[tuple[int, int]]] = {}
+    for opcode, at, _ in walk_chunk(data):
+        if opcode == Opcode.MESSAGE:
+            channel, _, log_time, _ = _MESSAGE_HEAD.unpack_from(data, at)
+            actual.setdefault(channel, []).append((log_time, at - 9))
+    for channel, (record_offset, start, length) in sorted(ref.index_records.items()):
+        handle.seek(start)
+        entries = sorted(struct.iter_unpack('<QQ', handle.read(length)))
+        if entries != sorted(actual.get(channel, [])):
+            result.note(f'damaged MessageIndex record at byte {record_offset} (channel {channel}: its '
+                        f'entries do not match the chunk at byte {ref.offset}; the messages are intact)')
+    unindexed = sorted(set(actual) - set(ref.index_records))
+    if unindexed:
+        result.note(f'chunk at byte {ref.offset} has no MessageIndex record for channel(s) '
+                    f'{", ".join(map(str, unindexed))} (lost or damaged; the messages are intact)')
 
 
 def iter_messages(result: McapScan, channel_ids: set[int] | None = None, start: int | None = None,

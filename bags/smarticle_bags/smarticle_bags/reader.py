@@ -96,11 +96,7 @@ class BagReader:
         else:
             raise BagError(f'{self.path} is neither a bag folder nor an .mcap file')
         for result in self.scans:
-            encodings = {c.message_encoding for c in result.channels.values()}
-            if encodings and 'cdr' not in encodings:
-                raise CorruptBagError(
-                    f'{result.path}: an MCAP file of profile {result.profile or "(none)"!r} with '
-                    f'{", ".join(sorted(encodings))} messages, not a ROS 2 bag (profile ros2, cdr messages)')
+            mcapfile.require_ros2(result)
             if result.profile not in ('ros2', ''):
                 _LOG.warning('%s: mcap profile is %r, not ros2', result.path, result.profile)
         if self.problems:
@@ -164,10 +160,12 @@ class BagReader:
             if decoder is None:
                 continue
             try:
-                yield raw, decoder(raw.data)
-            except (ValueError, IndexError, UnicodeDecodeError, TypeError) as err:
+                value = decoder(raw.data)
+            except Exception as err: # a generated decoder over bytes from disk
                 _LOG.warning('%s at t=%d: cannot decode %s message (%s); skipped', raw.topic, raw.log_time,
                              raw.type, err)
+                continue
+            yield raw, value
 
     @staticmethod
     def _decoder(factory: DecoderFactory, schema: Any, raw: RawMessage) -> Callable[[bytes], Any] | None:
@@ -178,7 +176,7 @@ class BagReader:
             return None
         try:
             return factory.decoder_for('cdr', schema)
-        except (ValueError, KeyError, IndexError, BagError, RuntimeError) as err:
+        except Exception as err: # mcap_ros2's parser of a definition read from disk
             _LOG.warning('%s: cannot parse the definition of %s (%s); its messages are skipped',
                          raw.topic, raw.type, err)
             return None

@@ -17,10 +17,14 @@ import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from collections import Counter
+
+from mcap.records import Channel, Schema
 from mcap.writer import CompressionType
 from mcap.writer import Writer as McapWriter
+from mcap_ros2._dynamic import generate_dynamic
 
-from . import mcapfile
+from . import mcapfile, msgdefs
 from .errors import BagError, BagNotFoundError, CorruptBagError, MetadataError
 from .metadata import METADATA_FILE, BagInfo, read_metadata, write_metadata
 from .reader import info_from_scans
@@ -58,18 +62,48 @@ def _natural_key(path: Path) -> list[object]:
     return [int(part) if part.isdigit() else part for part in re.split(r'(\d+)', path.name)]
 
 
+def checked_schema(result: mcapfile.McapScan, schema: Schema, notes: list[str]) -> Schema | None:
+    """Return ``schema`` if it can be trusted or parses, else the installed definition of its type, else None.
+
+    A copy not covered by a CRC that held is parsed; a ``ros2msg`` text that does not parse is replaced by
+    the installed definition of the type (noted in ``notes``), or dropped when the type is not installed.
+    """
+    if schema.encoding != 'ros2msg' or ('schemas', schema.id) in result.trusted:
+        return schema
+    try:
+        generate_dynamic(schema.name, schema.data.decode())
+        return schema
+    except Exception as err:  # mcap_ros2's parser of a definition read from a damaged file
+        reason = str(err).splitlines()[0] if str(err) else type(err).__name__
+    try:
+        text = msgdefs.full_definition(schema.name)
+    except BagError:
+        notes.append(f'{result.path.name}: the definition of {schema.name} (schema {schema.id}) is damaged '
+                     f'({reason}) and the type is not installed; its messages are dropped')
+        return None
+    notes.append(f'{result.path.name}: the definition of {schema.name} (schema {schema.id}) is damaged '
+                 f'({reason}); replaced by the installed definition')
+    return Schema(id=schema.id, name=schema.name, encoding='ros2msg', data=text.encode())
+
+
 def write_salvaged(result: mcapfile.McapScan, target: Path,
-                   compression: CompressionType = CompressionType.ZSTD) -> int:
-    """Write the intact messages of a scanned file to a new complete .mcap ``target``; return their count."""
+                   compression: CompressionType = CompressionType.ZSTD, notes: list[str] | None = None) -> int:
+    """Write the intact messages of a scanned file to a new complete .mcap ``target``; return their count.
+
+    Messages of channels without a usable schema are left out (and counted in ``notes``).
+    """
+    notes = notes if notes is not None else []
+    schemas = {i: checked_schema(result, s, notes) for i, s in sorted(result.schemas.items())}
+    skipped: Counter[str] = Counter()
     count = 0
     with open(target, 'xb') as handle:
-        writer = McapWriter(handle, compression=compression)
+        writer = McapWriter(handle, compression=compression, enable_data_crcs=True)
         writer.start(profile=result.profile or 'ros2', library=result.library or LIBRARY)
         schema_ids: dict[int, int] = {}
         channel_ids: dict[int, int] = {}
 
-        def register(channel: mcapfile.Channel) -> int:
-            schema = result.schemas.get(channel.schema_id)
+        def register(channel: Channel) -> int:
+            schema = schemas.get(channel.schema_id)
             if schema is not None and schema.id not in schema_ids:
                 schema_ids[schema.id] = writer.register_schema(schema.name, schema.encoding, schema.data)
             channel_ids[channel.id] = writer.register_channel(
@@ -80,22 +114,28 @@ def write_salvaged(result: mcapfile.McapScan, target: Path,
         for _, channel in sorted(result.channels.items()):
             register(channel)
         for channel, message in mcapfile.iter_messages(result):
+            if channel.message_encoding == 'cdr' and schemas.get(channel.schema_id) is None:
+                skipped[channel.topic] += 1
+                continue
             new_id = channel_ids.get(channel.id)
             if new_id is None:  # learnt from inside a chunk
                 new_id = register(channel)
             writer.add_message(new_id, message.log_time, message.data, message.publish_time, message.sequence)
             count += 1
         writer.finish()
+    for topic, n in sorted(skipped.items()):
+        notes.append(f'{result.path.name}: {n} messages of {topic} dropped (no usable message definition)')
     return count
 
 
-def repair(result: mcapfile.McapScan, compression: CompressionType = CompressionType.ZSTD) -> Path:
+def repair(result: mcapfile.McapScan, compression: CompressionType = CompressionType.ZSTD,
+           notes: list[str] | None = None) -> Path:
     """Replace a damaged .mcap by a complete file of its intact messages; return the kept original."""
     path = result.path
     tmp = path.with_name(f'.{path.name}.repair')
     if tmp.exists():
         tmp.unlink()
-    write_salvaged(result, tmp, compression)
+    write_salvaged(result, tmp, compression, notes)
     original = _free(path.with_name(path.name + DAMAGED_SUFFIX))
     os.replace(path, original)
     os.replace(tmp, path)
@@ -144,7 +184,9 @@ def reindex(folder: Path | str, replace: bool = False, output: Path | str | None
     unreadable: list[Path] = []
     for path in paths:
         try:
-            scans.append(mcapfile.scan(path, verify=True))
+            result = mcapfile.scan(path, verify=True)
+            mcapfile.require_ros2(result)
+            scans.append(result)
         except CorruptBagError as err:
             unreadable.append(path)
             report.problems.append(str(err))
@@ -163,7 +205,7 @@ def reindex(folder: Path | str, replace: bool = False, output: Path | str | None
     if replace:
         target = folder
         for result in damaged:
-            original = repair(result)
+            original = repair(result, notes=report.dropped)
             report.repaired.append(f'{result.path.name} (original kept as {original.name})')
         for path in unreadable:
             kept = _free(path.with_name(path.name + DAMAGED_SUFFIX))
@@ -179,7 +221,7 @@ def reindex(folder: Path | str, replace: bool = False, output: Path | str | None
         for result in scans:
             new = target / result.path.name
             if result in damaged:
-                write_salvaged(result, new)
+                write_salvaged(result, new, notes=report.dropped)
                 report.repaired.append(f'{result.path.name} -> {new}')
             else:
                 shutil.copy2(result.path, new)
