@@ -59,30 +59,33 @@ class TopicPayloads:
 
 def gather(reader: Any, topics: Iterable[str], start: int | None = None,
            end: int | None = None) -> dict[str, TopicPayloads]:
-    """Collect the payloads of ``topics`` from every intact chunk of the bag (one pass over the files)."""
+    """Collect the payloads of ``topics`` from every intact chunk of the bag (one pass over the files).
+
+    Messages are found through each chunk's message index (checked against the records it points
+    to); a chunk without a usable index is walked record by record.
+    """
     wanted = list(dict.fromkeys(topics))
     reader.check_topics(wanted)
     lo = start if start is not None else 0
     hi = end if end is not None else 2**64 - 1
-    times: dict[str, list[int]] = {t: [] for t in wanted}
-    data: dict[str, list[bytes]] = {t: [] for t in wanted}
-    types: dict[str, str] = {t: reader.topics[t].type for t in wanted}
+    parts: dict[str, list[tuple[npt.NDArray[np.int64], list[Any]]]] = {t: [] for t in wanted}
+    cache = getattr(reader, 'chunk_cache', None)
     for result in reader.scans:
-        by_id = {c.id: c.topic for c in result.channels.values() if c.topic in times}
-        for message in result.loose:
-            topic = by_id.get(message.channel_id)
-            if topic is not None and lo <= message.log_time <= hi:
-                times[topic].append(message.log_time)
-                data[topic].append(message.data)
-        for ref, chunk in mcapfile.iter_chunk_data(result, start, end):
-            try:
-                _walk(chunk, by_id, times, data, result, ref)
-            except (struct.error, mcapfile.ChunkDamaged) as err:
-                result.mark_damaged(ref, f'records do not add up: {err}')
+        by_id = {c.id: c.topic for c in result.channels.values() if c.topic in parts}
+        loose = [m for m in result.loose if m.channel_id in by_id and lo <= m.log_time <= hi]
+        chunks = _chunks(result, start, end, cache)
+        found = _from_index(result, chunks, by_id)
+        if found is None:
+            found = _from_walk(result, chunks, by_id, set(parts))
+        for topic in {by_id[m.channel_id] for m in loose}:
+            mine = [m for m in loose if by_id[m.channel_id] == topic]
+            parts[topic].append((np.array([m.log_time for m in mine], dtype=np.int64), [m.data for m in mine]))
+        for topic, (times, payloads) in found.items():
+            parts[topic].append((times, payloads))
     out = {}
     for topic in wanted:
-        stamps = np.array(times[topic], dtype=np.int64)
-        payloads = data[topic]
+        stamps = np.concatenate([p[0] for p in parts[topic]]) if parts[topic] else np.zeros(0, np.int64)
+        payloads = [x for p in parts[topic] for x in p[1]]
         if start is not None or end is not None:
             keep = np.flatnonzero((stamps >= lo) & (stamps <= hi))
             if len(keep) != len(stamps):
@@ -90,11 +93,108 @@ def gather(reader: Any, topics: Iterable[str], start: int | None = None,
         if len(stamps) > 1 and np.any(np.diff(stamps) < 0):
             order = np.argsort(stamps, kind='stable')
             stamps, payloads = stamps[order], [payloads[i] for i in order]
-        out[topic] = TopicPayloads(topic, types[topic], stamps, payloads)
+        out[topic] = TopicPayloads(topic, reader.topics[topic].type, stamps, payloads)
     return out
 
 
-def _walk(chunk: bytes, by_id: dict[int, str], times: dict[str, list[int]], data: dict[str, list[bytes]],
+_U64 = np.arange(8)
+
+
+def _field(buf: npt.NDArray[np.uint8], at: npt.NDArray[np.int64], size: int) -> npt.NDArray[Any]:
+    """Return the little-endian unsigned integers of ``size`` bytes at offsets ``at`` of ``buf``."""
+    raw = buf[at[:, None] + _U64[:size]]
+    return raw.view({2: '<u2', 8: '<u8'}[size]).ravel()
+
+
+@dataclass
+class _FileChunks:
+    """The intact chunks of one file, decompressed and joined: their refs, the bytes, where each starts."""
+
+    refs: list[mcapfile.ChunkRef]
+    joined: bytes
+    bases: list[int]
+
+
+def _chunks(result: mcapfile.McapScan, start: int | None, end: int | None, cache: Any) -> _FileChunks:
+    """Return the checked, decompressed chunks of ``result`` in read order (kept in ``cache`` if given)."""
+    key = ('joined', result.path, start, end)
+    if cache is not None and key in cache.data:
+        found: _FileChunks = cache.data[key]
+        return found
+    pairs = list(mcapfile.iter_chunk_data(result, start, end))
+    joined = b''.join(data for _, data in pairs)
+    bases = [0]
+    for _, data in pairs:
+        bases.append(bases[-1] + len(data))
+    chunks = _FileChunks([ref for ref, _ in pairs], joined, bases)
+    if cache is not None and cache.used + len(joined) <= cache.budget:
+        cache.data[key] = chunks
+        cache.used += len(joined)
+    return chunks
+
+
+def _from_index(result: mcapfile.McapScan, chunks: _FileChunks,
+                by_id: dict[int, str]) -> dict[str, tuple[npt.NDArray[np.int64], list[Any]]] | None:
+    """Find the wanted messages through the chunks' message indexes; None if an index is missing or wrong."""
+    if not chunks.refs or any(not ref.index_records for ref in chunks.refs):
+        return None if chunks.refs else {}
+    big, bases = chunks.joined, chunks.bases
+    buf = np.frombuffer(big, dtype=np.uint8)
+    out: dict[str, tuple[npt.NDArray[np.int64], list[Any]]] = {}
+    with open(result.path, 'rb') as handle:
+        for channel, topic in by_id.items():
+            offsets, times, limits = [], [], []
+            for ref, base, limit in zip(chunks.refs, bases[:-1], bases[1:], strict=True):
+                entry = ref.index_records.get(channel)
+                if entry is None:
+                    continue
+                handle.seek(entry[1])
+                raw = handle.read(entry[2])
+                if len(raw) != entry[2]:
+                    return None
+                pairs = np.frombuffer(raw, dtype='<u8').reshape(-1, 2)
+                times.append(pairs[:, 0])
+                offsets.append(pairs[:, 1].astype(np.int64) + base)
+                limits.append(np.full(len(pairs), limit, dtype=np.int64))
+            if not offsets:
+                continue
+            at = np.concatenate(offsets)
+            stamp = np.concatenate(times)
+            limit_at = np.concatenate(limits)
+            if np.any(at + 31 > limit_at):
+                return None
+            length = _field(buf, at + 1, 8).astype(np.int64)
+            good = ((buf[at] == 5) & (_field(buf, at + 9, 2) == channel) & (_field(buf, at + 15, 8) == stamp)
+                    & (length >= 22) & (at + 9 + length <= limit_at))
+            if not np.all(good):
+                return None
+            order = np.lexsort((at, stamp))
+            at, stamp, length = at[order], stamp[order], length[order]
+            payloads = [big[a + 31:a + 9 + n] for a, n in zip(at.tolist(), length.tolist(), strict=True)]
+            if topic in out:  # two channels of one topic
+                merged = np.concatenate([out[topic][0], stamp.astype(np.int64)])
+                keep = np.argsort(merged, kind='stable')
+                items = out[topic][1] + payloads
+                out[topic] = (merged[keep], [items[i] for i in keep])
+            else:
+                out[topic] = (stamp.astype(np.int64), payloads)
+    return out
+
+
+def _from_walk(result: mcapfile.McapScan, chunks: _FileChunks,
+               by_id: dict[int, str], wanted: set[str]) -> dict[str, tuple[npt.NDArray[np.int64], list[Any]]]:
+    """Find the wanted messages by walking the records of every chunk."""
+    times: dict[str, list[int]] = {t: [] for t in wanted}
+    data: dict[str, list[Any]] = {t: [] for t in wanted}
+    for ref, base, limit in zip(chunks.refs, chunks.bases[:-1], chunks.bases[1:], strict=True):
+        try:
+            _walk(chunks.joined[base:limit], by_id, times, data, result, ref)
+        except (struct.error, mcapfile.ChunkDamaged) as err:
+            result.mark_damaged(ref, f'records do not add up: {err}')
+    return {t: (np.array(times[t], dtype=np.int64), data[t]) for t in times if times[t]}
+
+
+def _walk(chunk: bytes, by_id: dict[int, str], times: dict[str, list[int]], data: dict[str, list[Any]],
           result: mcapfile.McapScan, ref: mcapfile.ChunkRef) -> None:
     """Append the wanted messages of one decompressed chunk to ``times``/``data`` (channels learnt too)."""
     pos, size = 0, len(chunk)
@@ -273,7 +373,7 @@ def decode_groups(item: TopicPayloads) -> list[Group]:
         while len(pending):
             first = int(pending[0])
             try:
-                layout = parse(payloads[int(rows[first])])
+                layout = parse(bytes(payloads[int(rows[first])]))
             except (LayoutError, UnicodeDecodeError, struct.error) as err:
                 skipped += 1
                 _LOG.warning('%s at t=%d: cannot decode %s message (%s); skipped', item.topic,

@@ -677,16 +677,40 @@ def iter_messages(result: McapScan, channel_ids: set[int] | None = None, start: 
                     yield channel, message
 
 
-def iter_chunk_data(result: McapScan, start: int | None = None,
-                    end: int | None = None) -> Iterator[tuple[ChunkRef, bytes]]:
-    """Yield (chunk, checked decompressed records) of the intact chunks overlapping [start, end], in file order."""
+class ChunkCache:
+    """Decompressed, checked chunks kept for the next pass over the same bag, up to ``budget`` bytes."""
+
+    def __init__(self, budget: int = 256 * 2**20) -> None:
+        self.budget = budget
+        self.used = 0
+        self.data: dict[Any, Any] = {}
+
+    def get(self, result: McapScan, ref: ChunkRef) -> bytes | None:
+        """Return the cached records of a chunk, or None."""
+        return self.data.get((result.path, ref.offset))
+
+    def put(self, result: McapScan, ref: ChunkRef, data: bytes) -> None:
+        """Keep the records of a chunk while the budget allows."""
+        if self.used + len(data) <= self.budget:
+            self.data[(result.path, ref.offset)] = data
+            self.used += len(data)
+
+
+def iter_chunk_data(result: McapScan, start: int | None = None, end: int | None = None,
+                    cache: ChunkCache | None = None) -> Iterator[tuple[ChunkRef, bytes]]:
+    """Yield (chunk, checked decompressed records) of the intact chunks overlapping [start, end] in read order."""
     lo = start if start is not None else 0
     hi = end if end is not None else 2**64
     refs = sorted((r for r in result.chunks if r.end_time >= lo and r.start_time <= hi),
                   key=lambda r: (r.start_time, r.offset))
     with open(result.path, 'rb') as handle:
         for ref in refs:
-            data = read_chunk(handle, result, ref)
-            if data is not None:
-                yield ref, data
+            data = cache.get(result, ref) if cache is not None else None
+            if data is None:
+                data = read_chunk(handle, result, ref)
+                if data is None:
+                    continue
+                if cache is not None:
+                    cache.put(result, ref, data)
+            yield ref, data
 

@@ -75,6 +75,8 @@ class BagReader:
     def __init__(self, path: Path | str, strict: bool = False, verify: bool | None = None) -> None:
         self.path = Path(path)
         check = strict if verify is None else verify
+        #: Decompressed chunks kept between passes of the columnar reader (``arrays.read_*``).
+        self.chunk_cache = mcapfile.ChunkCache()
         if not self.path.exists():
             raise BagNotFoundError(f'bag {self.path} does not exist')
         if self.path.is_dir():
