@@ -14,6 +14,7 @@ import pytest
 from rosbags.rosbag2 import Reader as RosbagsReader
 
 from smarticle_bags import arrays, cli, mcapfile
+from smarticle_bags.errors import CorruptBagError
 from smarticle_bags.metadata import read_metadata
 from smarticle_bags.reader import BagReader
 from smarticle_bags.reindex import reindex
@@ -97,3 +98,18 @@ def test_split_recording_after_sigkill(tmp_path: Path, limit: str,
     assert report.repaired == [f'{files[-1].name} (original kept as {files[-1].name}.damaged)']
     assert rosbags_count(out) == flushed
     assert BagReader(out, strict=True).info.message_count == flushed
+
+
+@pytest.mark.parametrize('damage', ['header only', 'zeroed'])
+def test_split_bag_with_an_empty_or_zeroed_last_file(tmp_path: Path, damage: str) -> None:
+    out = tmp_path / 'run'
+    record_and_kill(out, max_duration=1_000_000_000)
+    last = out / read_metadata(out).files[-1].path
+    data = last.read_bytes()
+    last.write_bytes(data[:40] if damage == 'header only' else bytes(len(data)))
+    reader = BagReader(out)  # the other files still read; the last one is reported
+    assert reader.problems and sum(1 for _ in reader.messages()) == 300
+    with pytest.raises(CorruptBagError, match=last.name):
+        BagReader(out, strict=True)
+    report = reindex(out)
+    assert report.output is not None and rosbags_count(report.output) == 300

@@ -568,8 +568,6 @@ def scan(path: Path, verify: bool = False) -> McapScan:
             _count_by_reading(handle, result, walker.statistics if result.complete else None)
     if not result.complete and not result.problems:
         result.note('no footer')
-    if not result.chunks and not result.loose and not result.channels and result.problems:
-        raise CorruptBagError(f'{path}: nothing readable: {"; ".join(result.problems)}')
     return result
 
 

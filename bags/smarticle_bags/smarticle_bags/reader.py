@@ -77,6 +77,8 @@ class BagReader:
         check = strict if verify is None else verify
         #: Decompressed chunks kept between passes of the columnar reader (``arrays.read_*``).
         self.chunk_cache = mcapfile.ChunkCache()
+        #: Files of the bag that are not readable at all (skipped unless strict).
+        self.unreadable: list[str] = []
         if not self.path.exists():
             raise BagNotFoundError(f'bag {self.path} does not exist')
         if self.path.is_dir():
@@ -91,7 +93,17 @@ class BagReader:
                                     f'{", ".join(missing)}; run "smarticle-bag reindex {self.path}"')
             if not paths:
                 raise MetadataError(f'{self.path}: metadata.yaml lists no storage files')
-            self.scans = [mcapfile.scan(p, check) for p in paths]
+            self.scans = []
+            for file_path in paths:
+                try:
+                    self.scans.append(mcapfile.scan(file_path, check))
+                except CorruptBagError as err:
+                    if strict or len(paths) == 1:
+                        raise
+                    self.unreadable.append(str(err))
+                    _LOG.warning('%s; the file is skipped', err)
+            if not self.scans:
+                raise CorruptBagError(f'{self.path}: no readable storage file: {"; ".join(self.unreadable)}')
         elif self.path.suffix == '.mcap':
             self.scans = [mcapfile.scan(self.path, check)]
             self.info = info_from_scans(self.scans)
@@ -110,7 +122,7 @@ class BagReader:
     @property
     def problems(self) -> list[str]:
         """What is wrong with the files (empty for a healthy bag)."""
-        return [f'{r.path.name}: {p}' for r in self.scans for p in r.problems]
+        return [f'{r.path.name}: {p}' for r in self.scans for p in r.problems] + self.unreadable
 
     @property
     def topics(self) -> dict[str, TopicInfo]:
