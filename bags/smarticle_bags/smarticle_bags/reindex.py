@@ -193,6 +193,9 @@ def reindex(folder: Path | str, replace: bool = False, output: Path | str | None
             report.dropped.append(f'{path.name}: the whole file (nothing readable)')
     if not scans:
         raise CorruptBagError(f'{folder}: no readable .mcap file: {"; ".join(report.problems)}')
+    if all(s.problems and not s.message_count for s in scans):
+        raise CorruptBagError(f'{folder}: nothing to salvage, no intact message in any file: '
+                              + '; '.join(s.describe_problems() for s in scans))
     damaged = [s for s in scans if s.problems]
     if not damaged and not unreadable:
         report.info = info_from_scans(scans, folder, custom)
