@@ -173,3 +173,14 @@ def test_empty_folder_and_truncated_file(tmp_path: Path, capsys: pytest.CaptureF
     assert code == 2 and 'bag_0.mcap' in err
     with pytest.raises(CorruptBagError, match='bag_0.mcap'):
         BagReader(tmp_path / 'bag')
+
+
+def test_check_of_intact_bags_and_stale_metadata(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    for bag in sorted((Path(__file__).resolve().parents[2] / 'bags' / 'samples').iterdir()):
+        code, out, _ = run_cli(['check', str(bag)], capsys)
+        assert code == 0 and 'OK:' in out and 'every CRC and record checked' in out
+    make_bag(tmp_path / 'bag', 10)
+    meta = tmp_path / 'bag' / 'metadata.yaml'
+    meta.write_text(meta.read_text().replace('message_count: 20', 'message_count: 25'))
+    code, out, _ = run_cli(['check', str(tmp_path / 'bag')], capsys)
+    assert code == 2 and 'says 25 messages for bag_0.mcap, the file holds 20' in out

@@ -72,6 +72,16 @@ def format_check(reader: BagReader) -> tuple[str, bool]:
         for damaged in result.damaged:
             lines.append(f'  {damaged.describe()}')
         lines += [f'  {p}' for p in result.problems if not (p.startswith('chunk at byte') and 'is damaged' in p)]
+    if reader.path.is_dir():
+        listed = {f.path: f.message_count for f in reader.info.files}
+        for result in reader.scans:
+            name = result.path.relative_to(reader.path).as_posix()
+            if not result.problems and listed.get(name, result.message_count) != result.message_count:
+                intact = False
+                lines.append(f'{reader.path / "metadata.yaml"}: says {listed[name]} messages for {name}, the '
+                             f'file holds {result.message_count}')
+    lines += [f'{p}' for p in reader.unreadable]
+    intact = intact and not reader.unreadable
     if not intact:
         lines.append(f'run "smarticle-bag reindex {reader.path}" to salvage the intact chunks')
     return '\n'.join(lines) + '\n', intact
