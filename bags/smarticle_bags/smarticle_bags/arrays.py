@@ -168,7 +168,7 @@ def poses_from_groups(item: col.TopicPayloads, groups: list[col.Group]) -> PoseS
     rows = col.decoded_rows(groups)
     width = max((g.layout.counts['poses'] for g in groups), default=0)
     xyh = np.full((len(rows), width, 3), np.nan)
-    stamp = col.stamps_of(groups, len(item.payloads))[rows]
+    stamp = col.stamps_of(groups, len(item.log_time))[rows]
     for group in groups:
         count = group.layout.counts['poses']
         if not count:
@@ -198,7 +198,7 @@ def joints_from_groups(item: col.TopicPayloads, groups: list[col.Group]) -> Join
                     data[f, at, column[name]] = group.values[key][:, i]
                 else:
                     data[f, at, column[name]] = np.nan
-    stamp = col.stamps_of(groups, len(item.payloads))[rows]
+    stamp = col.stamps_of(groups, len(item.log_time))[rows]
     return JointSeries(tuple(names), _seconds(item.log_time[rows]), stamp, data[0], data[1], data[2])
 
 
@@ -224,7 +224,7 @@ def read_clock(reader: BagReader, topic: str = '/clock') -> ClockSeries:
     item = col.gather(reader, [topic])[topic]
     groups = col.decode_groups(item)
     rows = col.decoded_rows(groups)
-    return ClockSeries(_seconds(item.log_time[rows]), col.stamps_of(groups, len(item.payloads))[rows])
+    return ClockSeries(_seconds(item.log_time[rows]), col.stamps_of(groups, len(item.log_time))[rows])
 
 
 def read_robot_topic(reader: BagReader, key: str, columnar: bool = True) -> dict[int, JointSeries]:

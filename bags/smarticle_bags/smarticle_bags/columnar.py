@@ -48,18 +48,54 @@ class LayoutError(BagError):
 
 
 @dataclass
+class Segment:
+    """Payloads lying in one buffer: their start offsets, lengths and log times."""
+
+    buf: npt.NDArray[np.uint8]
+    starts: npt.NDArray[np.int64]
+    lengths: npt.NDArray[np.int64]
+    times: npt.NDArray[np.int64]
+
+    @classmethod
+    def of(cls, payloads: list[bytes], times: list[int]) -> Segment:
+        """Return a segment holding ``payloads`` (joined into one buffer)."""
+        lengths = np.fromiter(map(len, payloads), dtype=np.int64, count=len(payloads))
+        starts = np.zeros(len(payloads), dtype=np.int64)
+        if len(payloads) > 1:
+            np.cumsum(lengths[:-1], out=starts[1:])
+        return cls(np.frombuffer(b''.join(payloads), dtype=np.uint8), starts, lengths,
+                   np.array(times, dtype=np.int64))
+
+    def select(self, keep: npt.NDArray[np.bool_]) -> Segment:
+        """Return the segment of the payloads where ``keep`` is true."""
+        return Segment(self.buf, self.starts[keep], self.lengths[keep], self.times[keep])
+
+
+@dataclass
 class TopicPayloads:
-    """The messages of one topic in log-time order: log times (ns) and CDR payloads."""
+    """The messages of one topic in log-time order: log times (ns), lengths, and where their bytes lie."""
 
     topic: str
     type: str
     log_time: npt.NDArray[np.int64]
-    payloads: list[bytes]
+    lengths: npt.NDArray[np.int64]
+    segments: list[tuple[Segment, npt.NDArray[np.int64]]]  # (segment, its payloads' rows in time order)
+
+    def matrix(self, length: int, rows: npt.NDArray[np.int64]) -> npt.NDArray[np.uint8]:
+        """Return the payloads of ``rows`` (all ``length`` bytes long, sorted) as a (rows, length) matrix."""
+        out = np.empty((len(rows), length), dtype=np.uint8)
+        for segment, seg_rows in self.segments:
+            mask = segment.lengths == length
+            if not mask.any():
+                continue
+            window = np.lib.stride_tricks.sliding_window_view(segment.buf, length)
+            out[np.searchsorted(rows, seg_rows[mask])] = window[segment.starts[mask]]
+        return out
 
 
 def gather(reader: Any, topics: Iterable[str], start: int | None = None,
            end: int | None = None) -> dict[str, TopicPayloads]:
-    """Collect the payloads of ``topics`` from every intact chunk of the bag (one pass over the files).
+    """Collect where the payloads of ``topics`` lie in the intact chunks of the bag (one pass over the files).
 
     Messages are found through each chunk's message index (checked against the records it points
     to); a chunk without a usable index is walked record by record.
@@ -68,32 +104,41 @@ def gather(reader: Any, topics: Iterable[str], start: int | None = None,
     reader.check_topics(wanted)
     lo = start if start is not None else 0
     hi = end if end is not None else 2**64 - 1
-    parts: dict[str, list[tuple[npt.NDArray[np.int64], list[Any]]]] = {t: [] for t in wanted}
+    parts: dict[str, list[Segment]] = {t: [] for t in wanted}
     cache = getattr(reader, 'chunk_cache', None)
     for result in reader.scans:
         by_id = {c.id: c.topic for c in result.channels.values() if c.topic in parts}
-        loose = [m for m in result.loose if m.channel_id in by_id and lo <= m.log_time <= hi]
+        loose: dict[str, tuple[list[bytes], list[int]]] = {}
+        for m in result.loose:
+            if m.channel_id in by_id and lo <= m.log_time <= hi:
+                entry = loose.setdefault(by_id[m.channel_id], ([], []))
+                entry[0].append(m.data)
+                entry[1].append(m.log_time)
+        for topic, (payloads, loose_times) in loose.items():
+            parts[topic].append(Segment.of(payloads, loose_times))
         chunks = _chunks(result, start, end, cache)
         found = _from_index(result, chunks, by_id)
         if found is None:
             found = _from_walk(result, chunks, by_id, set(parts))
-        for topic in {by_id[m.channel_id] for m in loose}:
-            mine = [m for m in loose if by_id[m.channel_id] == topic]
-            parts[topic].append((np.array([m.log_time for m in mine], dtype=np.int64), [m.data for m in mine]))
-        for topic, (times, payloads) in found.items():
-            parts[topic].append((times, payloads))
+        for topic, segment in found.items():
+            parts[topic].append(segment)
     out = {}
     for topic in wanted:
-        stamps = np.concatenate([p[0] for p in parts[topic]]) if parts[topic] else np.zeros(0, np.int64)
-        payloads = [x for p in parts[topic] for x in p[1]]
-        if start is not None or end is not None:
-            keep = np.flatnonzero((stamps >= lo) & (stamps <= hi))
-            if len(keep) != len(stamps):
-                stamps, payloads = stamps[keep], [payloads[i] for i in keep]
-        if len(stamps) > 1 and np.any(np.diff(stamps) < 0):
-            order = np.argsort(stamps, kind='stable')
-            stamps, payloads = stamps[order], [payloads[i] for i in order]
-        out[topic] = TopicPayloads(topic, reader.topics[topic].type, stamps, payloads)
+        segments = [seg if (start is None and end is None) else seg.select((seg.times >= lo) & (seg.times <= hi))
+                    for seg in parts[topic]]
+        times = np.concatenate([s.times for s in segments]) if segments else np.zeros(0, np.int64)
+        lengths = np.concatenate([s.lengths for s in segments]) if segments else np.zeros(0, np.int64)
+        rank = np.arange(len(times))
+        if len(times) > 1 and np.any(np.diff(times) < 0):
+            order = np.argsort(times, kind='stable')
+            rank = np.empty(len(times), dtype=np.int64)
+            rank[order] = np.arange(len(times))
+            times, lengths = times[order], lengths[order]
+        placed, at = [], 0
+        for segment in segments:
+            placed.append((segment, rank[at:at + len(segment.times)]))
+            at += len(segment.times)
+        out[topic] = TopicPayloads(topic, reader.topics[topic].type, times, lengths, placed)
     return out
 
 
@@ -102,7 +147,7 @@ _U64 = np.arange(8)
 
 def _field(buf: npt.NDArray[np.uint8], at: npt.NDArray[np.int64], size: int) -> npt.NDArray[Any]:
     """Return the little-endian unsigned integers of ``size`` bytes at offsets ``at`` of ``buf``."""
-    raw = buf[at[:, None] + _U64[:size]]
+    raw = np.lib.stride_tricks.sliding_window_view(buf, size)[at]
     return raw.view({2: '<u2', 8: '<u8'}[size]).ravel()
 
 
@@ -133,14 +178,13 @@ def _chunks(result: mcapfile.McapScan, start: int | None, end: int | None, cache
     return chunks
 
 
-def _from_index(result: mcapfile.McapScan, chunks: _FileChunks,
-                by_id: dict[int, str]) -> dict[str, tuple[npt.NDArray[np.int64], list[Any]]] | None:
+def _from_index(result: mcapfile.McapScan, chunks: _FileChunks, by_id: dict[int, str]) -> dict[str, Segment] | None:
     """Find the wanted messages through the chunks' message indexes; None if an index is missing or wrong."""
     if not chunks.refs or any(not ref.index_records for ref in chunks.refs):
         return None if chunks.refs else {}
-    big, bases = chunks.joined, chunks.bases
-    buf = np.frombuffer(big, dtype=np.uint8)
-    out: dict[str, tuple[npt.NDArray[np.int64], list[Any]]] = {}
+    bases = chunks.bases
+    buf = np.frombuffer(chunks.joined, dtype=np.uint8)
+    found: dict[str, list[tuple[Any, Any, Any]]] = {}
     with open(result.path, 'rb') as handle:
         for channel, topic in by_id.items():
             offsets, times, limits = [], [], []
@@ -168,21 +212,19 @@ def _from_index(result: mcapfile.McapScan, chunks: _FileChunks,
                     & (length >= 22) & (at + 9 + length <= limit_at))
             if not np.all(good):
                 return None
-            order = np.lexsort((at, stamp))
-            at, stamp, length = at[order], stamp[order], length[order]
-            payloads = [big[a + 31:a + 9 + n] for a, n in zip(at.tolist(), length.tolist(), strict=True)]
-            if topic in out:  # two channels of one topic
-                merged = np.concatenate([out[topic][0], stamp.astype(np.int64)])
-                keep = np.argsort(merged, kind='stable')
-                items = out[topic][1] + payloads
-                out[topic] = (merged[keep], [items[i] for i in keep])
-            else:
-                out[topic] = (stamp.astype(np.int64), payloads)
+            found.setdefault(topic, []).append((at, stamp.astype(np.int64), length - 22))
+    out = {}
+    for topic, pieces in found.items():
+        at = np.concatenate([p[0] for p in pieces])
+        stamp = np.concatenate([p[1] for p in pieces])
+        size = np.concatenate([p[2] for p in pieces])
+        order = np.lexsort((at, stamp))  # log time, then place in the file: the reader's order
+        out[topic] = Segment(buf, at[order] + 31, size[order], stamp[order])
     return out
 
 
 def _from_walk(result: mcapfile.McapScan, chunks: _FileChunks,
-               by_id: dict[int, str], wanted: set[str]) -> dict[str, tuple[npt.NDArray[np.int64], list[Any]]]:
+               by_id: dict[int, str], wanted: set[str]) -> dict[str, Segment]:
     """Find the wanted messages by walking the records of every chunk."""
     times: dict[str, list[int]] = {t: [] for t in wanted}
     data: dict[str, list[Any]] = {t: [] for t in wanted}
@@ -191,7 +233,7 @@ def _from_walk(result: mcapfile.McapScan, chunks: _FileChunks,
             _walk(chunks.joined[base:limit], by_id, times, data, result, ref)
         except (struct.error, mcapfile.ChunkDamaged) as err:
             result.mark_damaged(ref, f'records do not add up: {err}')
-    return {t: (np.array(times[t], dtype=np.int64), data[t]) for t in times if times[t]}
+    return {t: Segment.of(data[t], times[t]) for t in times if times[t]}
 
 
 def _walk(chunk: bytes, by_id: dict[int, str], times: dict[str, list[int]], data: dict[str, list[Any]],
@@ -358,22 +400,17 @@ def decode_groups(item: TopicPayloads) -> list[Group]:
     parse = LAYOUTS.get(item.type)
     if parse is None:
         raise BagError(f'{item.topic}: columnar decoding supports {", ".join(TYPES)}, not {item.type}')
-    payloads = item.payloads
-    if not payloads:
-        return []
-    lengths = np.fromiter(map(len, payloads), dtype=np.int64, count=len(payloads))
     groups: list[Group] = []
     skipped = 0
-    for length in np.unique(lengths):
-        rows = np.flatnonzero(lengths == length)
-        joined = b''.join(payloads) if len(rows) == len(payloads) else b''.join([payloads[i] for i in rows])
-        matrix = np.frombuffer(joined, dtype=np.uint8).reshape(len(rows), int(length))
+    for length in np.unique(item.lengths):
+        rows = np.flatnonzero(item.lengths == length)
+        matrix = item.matrix(int(length), rows)
         pending = np.arange(len(rows))
         templates = 0
         while len(pending):
             first = int(pending[0])
             try:
-                layout = parse(bytes(payloads[int(rows[first])]))
+                layout = parse(matrix[first].tobytes())
             except (LayoutError, UnicodeDecodeError, struct.error) as err:
                 skipped += 1
                 _LOG.warning('%s at t=%d: cannot decode %s message (%s); skipped', item.topic,
@@ -388,7 +425,7 @@ def decode_groups(item: TopicPayloads) -> list[Group]:
                 columns = np.concatenate([np.arange(a, b) for a, b in layout.key])
                 match = np.all(matrix[:, columns][pending] == matrix[first, columns], axis=1)
             chosen = pending[match]
-            records = np.frombuffer(joined, dtype=layout.dtype)[chosen]
+            records = np.ascontiguousarray(matrix[chosen]).view(layout.dtype)[:, 0]
             groups.append(Group(rows[chosen], layout, records))
             pending = pending[~match]
     if skipped:
