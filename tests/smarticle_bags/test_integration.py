@@ -27,12 +27,13 @@ def _reliable() -> Any:
     return QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 
 
-def _start_recording(nodes: NodeProcesses, ros_node: Callable[[str], Any], out: Path) -> tuple[Any, Any, Any]:
+def _start_recording(nodes: NodeProcesses, ros_node: Callable[[str], Any], out: Path,
+                     *extra: str) -> tuple[Any, Any, Any]:
     """Start a recorder of TOPIC and a test publisher; return (process, node, publisher) once matched."""
     from sensor_msgs.msg import JointState
 
     proc = nodes.start('smarticle-bag', 'record', TOPIC, '-o', str(out), '--flush-interval', '0.2',
-                       '--polling-interval', '0.1')
+                       '--polling-interval', '0.1', *extra)
     node = ros_node('bag_test_publisher')
     publisher = node.create_publisher(JointState, TOPIC, _reliable())
     matched = spin_until(node, lambda: publisher.get_subscription_count() > 0, 20.0)
@@ -81,6 +82,34 @@ def test_killed_recorder_leaves_readable_bag(nodes: NodeProcesses, ros_node: Cal
     report = reindex(out, replace=True)
     assert report.repaired
     assert BagReader(out, strict=True).info.message_count == 60
+
+
+def test_killed_split_recording(nodes: NodeProcesses, ros_node: Callable[[str], Any], tmp_path: Path) -> None:
+    from rosbags.rosbag2 import Reader
+
+    out = tmp_path / 'split'
+    proc, node, publisher = _start_recording(nodes, ros_node, out, '--max-bag-duration', '0.5')
+    for i in range(120):
+        publisher.publish(_joint_state(i))
+        spin_until(node, lambda: False, 0.015)
+    time.sleep(0.8)  # several flush intervals: everything so far is on disk
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait(timeout=5)
+    files = sorted(out.glob('*.mcap'), key=lambda p: int(p.stem.rsplit('_', 1)[1]))
+    assert len(files) >= 3, nodes.output(proc)
+    for index, path in enumerate(files[:-1]):  # closed files: complete, rosbags reads them as they are
+        single = tmp_path / f'single_{index}'
+        single.mkdir()
+        single.joinpath(path.name).write_bytes(path.read_bytes())
+        assert not reindex(single).repaired
+        with Reader(single) as other:
+            assert other.message_count > 0
+    reader = BagReader(out)  # one bag over all files, the last one salvaged
+    stamps = [msg.header.stamp.sec for _, msg in reader.decoded([TOPIC])]
+    assert stamps == list(range(120))
+    reindex(out, replace=True)
+    with Reader(out) as other:
+        assert other.message_count == 120
 
 
 def test_player_timing_and_unknown_type(nodes: NodeProcesses, ros_node: Callable[[str], Any],

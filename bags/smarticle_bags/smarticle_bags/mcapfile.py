@@ -67,7 +67,7 @@ _AFTER_CHUNK = {int(Opcode.MESSAGE_INDEX), int(Opcode.CHUNK), int(Opcode.DATA_EN
 _NAMES = {int(op): op.name.title().replace('_', '') for op in Opcode}
 
 
-class ChunkDamaged(Exception):
+class ChunkDamaged(CorruptBagError):
     """A chunk whose data cannot be trusted (the message says why)."""
 
 
