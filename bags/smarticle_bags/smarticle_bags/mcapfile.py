@@ -233,6 +233,34 @@ def _parse_chunk_head(buf: Any, offset: int, length: int) -> ChunkRef:
     return ChunkRef(offset, 9 + length, start, end, compression, usize, crc, at, records_length)
 
 
+def _lenient_chunk(buf: Any, offset: int, length: int) -> ChunkRef | None:
+    """Return a chunk whose header fields are damaged but whose data pass the CRC it stores, else None.
+
+    The record's own length and the CRC field are trusted; the compression is tried in turn, and the
+    log-time range is taken from the messages.
+    """
+    body = offset + 9
+    if length < _CHUNK_HEAD.size + 8:
+        return None
+    _, _, usize, crc, _ = _CHUNK_HEAD.unpack_from(buf, body)
+    if not crc:
+        return None
+    for compression in _COMPRESSIONS:
+        head = _CHUNK_HEAD.size + len(compression) + 8
+        ref = ChunkRef(offset, 9 + length, 0, 0, compression, usize, crc, body + head, length - head)
+        try:
+            data = decompress(ref, bytes(buf[ref.records_offset:ref.records_offset + ref.records_length]))
+            times = [log for op, at, _ in walk_chunk(data) if op == Opcode.MESSAGE
+                     for _, _, log, _ in [_MESSAGE_HEAD.unpack_from(data, at)]]
+        except ChunkDamaged:
+            continue
+        if times:
+            ref.start_time, ref.end_time = min(times), max(times)
+        ref.uncompressed_size = len(data)
+        return ref
+    return None
+
+
 def _resync(buf: Any, start: int, size: int) -> int | None:
     """Return the offset of the next chunk record at or after ``start`` whose header adds up, or None."""
     at = start
@@ -397,6 +425,15 @@ class _Walker:
                 try:
                     ref = _parse_chunk_head(buf, offset, length)
                 except ChunkDamaged as err:
+                    kept = _lenient_chunk(buf, offset, length) if end + 9 <= size and buf[end] in _AFTER_CHUNK \
+                        else None
+                    if kept is not None:
+                        self.problem(f'damaged Chunk record at byte {offset} ({err}); its data pass their CRC '
+                                     f'and are kept')
+                        self.result.chunks.append(kept)
+                        self.last_chunk = kept
+                        offset = end
+                        continue
                     if end + 9 <= size and buf[end] in _AFTER_CHUNK:
                         self.last_chunk = ChunkRef(offset, 9 + length, 0, 0)
                         self.bad_chunks.append((self.last_chunk, f'damaged chunk header: {err}'))
