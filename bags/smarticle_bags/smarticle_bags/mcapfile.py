@@ -57,6 +57,9 @@ RECORD_ERRORS = (McapError, ValueError, RuntimeError, struct.error, EOFError, In
 #: Kept for callers of the previous name.
 CHUNK_ERRORS = RECORD_ERRORS
 
+#: The data section's CRC is checked on every open up to this size (one pass over the bytes), and for
+#: any size by ``scan(verify=True)``.
+DATA_CRC_ALWAYS = 2 * 2**30
 _PREFIX = struct.Struct('<BQ')
 _CHUNK_HEAD = struct.Struct('<QQQII')  # start, end, uncompressed size, crc, compression name length
 _MESSAGE_HEAD = struct.Struct('<HIQQ')  # channel, sequence, log time, publish time
@@ -512,7 +515,7 @@ class _Walker:
             (crc,) = struct.unpack_from('<I', self.buf, offset + 9)
             self.in_summary = True
             self.data_end_at = offset
-            if crc and self.verify:
+            if crc and (self.verify or offset <= DATA_CRC_ALWAYS):
                 actual = zlib.crc32(memoryview(self.buf)[:offset])
                 if actual != crc:
                     self.problem(f'data section CRC mismatch (DataEnd record at byte {offset}: stored '
