@@ -197,6 +197,8 @@ def _from_index(result: mcapfile.McapScan, chunks: _FileChunks, by_id: dict[int,
                 if len(raw) != entry[2]:
                     return None
                 pairs = np.frombuffer(raw, dtype='<u8').reshape(-1, 2)
+                if limit - base < 31 or np.any(pairs[:, 1] > np.uint64(limit - base - 31)):
+                    return None  # an entry pointing outside its chunk: the index is damaged
                 times.append(pairs[:, 0])
                 offsets.append(pairs[:, 1].astype(np.int64) + base)
                 limits.append(np.full(len(pairs), limit, dtype=np.int64))
@@ -205,11 +207,9 @@ def _from_index(result: mcapfile.McapScan, chunks: _FileChunks, by_id: dict[int,
             at = np.concatenate(offsets)
             stamp = np.concatenate(times)
             limit_at = np.concatenate(limits)
-            if np.any(at + 31 > limit_at):
-                return None
             length = _field(buf, at + 1, 8).astype(np.int64)
             good = ((buf[at] == 5) & (_field(buf, at + 9, 2) == channel) & (_field(buf, at + 15, 8) == stamp)
-                    & (length >= 22) & (at + 9 + length <= limit_at))
+                    & (length >= 22) & (length <= limit_at - at - 9))
             if not np.all(good):
                 return None
             found.setdefault(topic, []).append((at, stamp.astype(np.int64), length - 22))
@@ -231,7 +231,9 @@ def _from_walk(result: mcapfile.McapScan, chunks: _FileChunks,
     for ref, base, limit in zip(chunks.refs, chunks.bases[:-1], chunks.bases[1:], strict=True):
         try:
             _walk(chunks.joined[base:limit], by_id, times, data, result, ref)
-        except (struct.error, mcapfile.ChunkDamaged) as err:
+        except mcapfile.RECORD_ERRORS as err:
+            result.mark_damaged(ref, f'records do not add up: {err}')
+        except mcapfile.ChunkDamaged as err:
             result.mark_damaged(ref, f'records do not add up: {err}')
     return {t: Segment.of(data[t], times[t]) for t in times if times[t]}
 
@@ -302,7 +304,7 @@ class _Cursor:
         raw = self.data[at:at + size]
         return raw[:-1].decode() if raw.endswith(b'\x00') else raw.decode()
 
-    def array(self, kind: str, size: int, count: int) -> tuple[int, int]:
+    def array(self, size: int, count: int) -> tuple[int, int]:
         """Return (offset, count) of ``count`` values of ``size`` bytes, aligned as CDR does."""
         if count:
             self.align(size)
@@ -349,7 +351,7 @@ def pose_array_layout(payload: bytes) -> Layout:
     stamp = cur.stamp()
     cur.string()
     count = cur.count()
-    poses, _ = cur.array('f8', 8, count * 7)
+    poses, _ = cur.array(8, count * 7)
     _trailing(cur, payload)
     fields: _Fields = {'sec': (stamp, 'i4', ()), 'nanosec': (stamp + 4, 'u4', ())}
     if count:
@@ -366,7 +368,7 @@ def joint_state_layout(payload: bytes) -> Layout:
     fields: _Fields = {'sec': (stamp, 'i4', ()), 'nanosec': (stamp + 4, 'u4', ())}
     counts = {}
     for name in ('position', 'velocity', 'effort'):
-        at, count = cur.array('f8', 8, cur.count())
+        at, count = cur.array(8, cur.count())
         counts[name] = count
         if count:
             fields[name] = (at, 'f8', (count,))
