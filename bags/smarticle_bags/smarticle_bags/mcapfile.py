@@ -415,6 +415,11 @@ class _Walker:
             opcode, length = _PREFIX.unpack_from(buf, offset)
             end = offset + 9 + length
             if opcode not in _KNOWN or end > size:
+                if opcode == Opcode.CHUNK and offset + 9 + 16 <= size:  # its time range is still there
+                    start, stop = struct.unpack_from('<QQ', buf, offset + 9)
+                    if start <= stop:
+                        self.bad_chunks.append((ChunkRef(offset, size - offset, start, stop),
+                                                f'cut off at byte {size}, the end of the file'))
                 if opcode in _KNOWN:
                     what = (f'{_NAMES[opcode]} record at byte {offset} is cut off or has a damaged length '
                             f'({length} bytes declared, file ends at byte {size})')
