@@ -81,6 +81,8 @@ def test_chunk_crc_is_checked_everywhere(tmp_path: Path, compression: Compressio
     assert report.output is not None and report.info.message_count == len(got)
     text = (report.output / 'reindex_report.txt').read_text()
     assert f'chunk at byte {ref.offset}' in text and 'messages lost' in text
+    assert f'lost in damaged chunks: {sum(lost.values())} messages' in text
+    assert report.info.message_count + sum(lost.values()) == 200
     from rosbags.rosbag2 import Reader
     with Reader(report.output) as other:
         assert {(c.topic, t, bytes(d)) for c, t, d in other.messages()} == got

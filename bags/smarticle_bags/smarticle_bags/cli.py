@@ -238,6 +238,8 @@ def _dispatch(ns: argparse.Namespace, ros_args: list[str] | None) -> int:
         print(f'dropped: {line}')
     for line in report.repaired:
         print(f'repaired: {line}')
+    if report.repaired:
+        print(report.lost_line())
     out = report.output or Path(ns.bag)
     print(f'wrote {out / "metadata.yaml"}: {report.info.message_count} messages in '
           f'{len(report.info.files)} files, {len(report.info.topics)} topics')

@@ -45,10 +45,23 @@ class ReindexReport:
     problems: list[str] = field(default_factory=list)
     dropped: list[str] = field(default_factory=list)
     report_path: Path | None = None
+    lost: Counter[str] = field(default_factory=Counter)
+    lost_unknown: int = 0
+
+    def lost_line(self) -> str:
+        """One line: the messages lost in damaged chunks, per topic."""
+        total = sum(self.lost.values())
+        line = f'lost in damaged chunks: {total} messages'
+        if total:
+            line += ' (' + ', '.join(f'{t} {n}' for t, n in sorted(self.lost.items())) + ')'
+        if self.lost_unknown:
+            line += f', plus those of {self.lost_unknown} chunk(s) whose message index is gone too'
+        return line
 
     def text(self) -> str:
         """Return the text of ``reindex_report.txt``."""
-        lines = [f'reindex of {len(self.info.files)} file(s): {self.info.message_count} messages kept']
+        lines = [f'reindex of {len(self.info.files)} file(s): {self.info.message_count} messages kept',
+                 self.lost_line()]
         lines += [f'found: {p}' for p in self.problems]
         lines += [f'dropped: {d}' for d in self.dropped] or ['dropped: nothing']
         lines += [f'repaired: {r}' for r in self.repaired]
@@ -205,6 +218,11 @@ def reindex(folder: Path | str, replace: bool = False, output: Path | str | None
     for result in damaged:
         report.problems.append(result.describe_problems())
         report.dropped += _dropped(result)
+        for chunk in result.damaged:
+            if chunk.lost is None:
+                report.lost_unknown += 1
+            else:
+                report.lost.update(chunk.lost)
     if replace:
         target = folder
         for result in damaged:
