@@ -150,6 +150,32 @@ def test_player_timing_and_unknown_type(nodes: NodeProcesses, ros_node: Callable
     assert 'skipping /mystery: unknown message type mystery_msgs/msg/Thing' in log
 
 
+def test_player_plays_a_split_bag_as_one(nodes: NodeProcesses, ros_node: Callable[[str], Any],
+                                         tmp_path: Path) -> None:
+    from geometry_msgs.msg import PoseArray
+
+    bag = tmp_path / 'split'
+    step = 50_000_000
+    with BagWriter(bag, WriterOptions(chunk_size=4000, max_bag_duration=500_000_000)) as writer:
+        writer.add_topic(POSES, 'geometry_msgs/msg/PoseArray')
+        for i in range(30):
+            writer.write(POSES, pose_array(i), T0 + i * step)
+    assert len(BagReader(bag).info.files) == 3
+    node = ros_node('bag_split_subscriber')
+    received: list[int] = []
+    node.create_subscription(PoseArray, POSES, lambda msg: received.append(msg.header.stamp.sec), _reliable())
+    proc = nodes.start('smarticle-bag', 'play', str(bag), '-r', '4.0', '--start-paused')
+    from std_msgs.msg import Bool
+    pause = node.create_publisher(Bool, '/player/pause', _reliable())
+    assert spin_until(node, lambda: pause.get_subscription_count() > 0 and node.count_publishers(POSES) > 0,
+                      20.0), nodes.output(proc)
+    spin_until(node, lambda: False, 0.5)  # let both directions match
+    pause.publish(Bool(data=False))
+    assert spin_until(node, lambda: len(received) == 30, 30.0), nodes.output(proc)
+    assert proc.wait(timeout=10) == 0
+    assert received == list(range(30))
+
+
 def test_play_rejects_bad_rate_and_missing_topic(nodes: NodeProcesses, tmp_path: Path) -> None:
     bag = tmp_path / 'b'
     with BagWriter(bag) as writer:
