@@ -184,3 +184,15 @@ def test_malformed_messages_are_skipped_with_a_warning(tmp_path: Path, caplog: p
     poses = arrays.read_poses(BagReader(tmp_path / 'bag'))
     assert len(poses.stamp) == 9 and 4.0 not in poses.stamp
     assert any('cannot decode' in r.getMessage() for r in caplog.records)
+
+
+def test_large_files_are_read_in_batches(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    make_mixed_bag(tmp_path / 'bag')
+    whole = BagReader(tmp_path / 'bag')
+    expected_poses = arrays.read_poses(whole)
+    expected_joints = arrays.read_joints(whole, '/smarticle_0/joint_states')
+    monkeypatch.setattr(columnar, 'BATCH_BYTES', 3000)  # several batches of a few chunks each
+    batched = BagReader(tmp_path / 'bag')
+    assert_same_poses(arrays.read_poses(batched), expected_poses)
+    assert_same_joints(arrays.read_joints(batched, '/smarticle_0/joint_states'), expected_joints)
+    assert not batched.chunk_cache.data  # nothing kept between calls when streaming

@@ -23,7 +23,7 @@ from __future__ import annotations
 import logging
 import struct
 from dataclasses import dataclass, field
-from typing import Any, Callable, Iterable
+from typing import Any, Callable, Iterable, Iterator
 
 import numpy as np
 import numpy.typing as npt
@@ -65,6 +65,20 @@ class Segment:
             np.cumsum(lengths[:-1], out=starts[1:])
         return cls(np.frombuffer(b''.join(payloads), dtype=np.uint8), starts, lengths,
                    np.array(times, dtype=np.int64))
+
+    def compact(self) -> Segment:
+        """Return a copy holding only these payloads (so the buffer they were cut from can go)."""
+        starts = np.zeros(len(self.starts), dtype=np.int64)
+        pieces, at = [], 0
+        for length in np.unique(self.lengths):
+            mask = self.lengths == length
+            count = int(mask.sum())
+            rows = np.lib.stride_tricks.sliding_window_view(self.buf, int(length))[self.starts[mask]]
+            pieces.append(rows.reshape(-1))
+            starts[mask] = at + int(length) * np.arange(count)
+            at += int(length) * count
+        buf = np.concatenate(pieces) if pieces else np.zeros(0, dtype=np.uint8)
+        return Segment(buf, starts, self.lengths, self.times)
 
     def select(self, keep: npt.NDArray[np.bool_]) -> Segment:
         """Return the segment of the payloads where ``keep`` is true."""
@@ -116,12 +130,12 @@ def gather(reader: Any, topics: Iterable[str], start: int | None = None,
                 entry[1].append(m.log_time)
         for topic, (payloads, loose_times) in loose.items():
             parts[topic].append(Segment.of(payloads, loose_times))
-        chunks = _chunks(result, start, end, cache)
-        found = _from_index(result, chunks, by_id)
-        if found is None:
-            found = _from_walk(result, chunks, by_id, set(parts))
-        for topic, segment in found.items():
-            parts[topic].append(segment)
+        for chunks, streaming in _batches(result, start, end, cache):
+            found = _from_index(result, chunks, by_id)
+            if found is None:
+                found = _from_walk(result, chunks, by_id, set(parts))
+            for topic, segment in found.items():
+                parts[topic].append(segment.compact() if streaming else segment)
     out = {}
     for topic in wanted:
         segments = [seg if (start is None and end is None) else seg.select((seg.times >= lo) & (seg.times <= hi))
@@ -160,22 +174,49 @@ class _FileChunks:
     bases: list[int]
 
 
-def _chunks(result: mcapfile.McapScan, start: int | None, end: int | None, cache: Any) -> _FileChunks:
-    """Return the checked, decompressed chunks of ``result`` in read order (kept in ``cache`` if given)."""
-    key = ('joined', result.path, start, end)
-    if cache is not None and key in cache.data:
-        found: _FileChunks = cache.data[key]
-        return found
-    pairs = list(mcapfile.iter_chunk_data(result, start, end))
-    joined = b''.join(data for _, data in pairs)
+#: Decompressed bytes of one file handled at once; a larger file is read in batches of this size and
+#: only the wanted payloads of each batch are kept (memory stays bounded for long recordings).
+BATCH_BYTES = 256 * 2**20
+
+
+def _joined(pairs: list[tuple[mcapfile.ChunkRef, bytes]]) -> _FileChunks:
+    """Join decompressed chunks into one buffer."""
     bases = [0]
     for _, data in pairs:
         bases.append(bases[-1] + len(data))
-    chunks = _FileChunks([ref for ref, _ in pairs], joined, bases)
-    if cache is not None and cache.used + len(joined) <= cache.budget:
+    return _FileChunks([ref for ref, _ in pairs], b''.join(data for _, data in pairs), bases)
+
+
+def _batches(result: mcapfile.McapScan, start: int | None, end: int | None,
+             cache: Any) -> Iterator[tuple[_FileChunks, bool]]:
+    """Yield (checked, decompressed chunks joined, streaming) of ``result`` in read order.
+
+    A file whose chunks decompress to at most BATCH_BYTES comes as one batch (kept in ``cache`` for
+    the next call when it fits); a larger one in batches of about BATCH_BYTES (streaming: the caller
+    must copy what it keeps out of each batch).
+    """
+    key = ('joined', result.path, start, end)
+    if cache is not None and key in cache.data:
+        yield cache.data[key], False
+        return
+    streaming = sum(ref.uncompressed_size for ref in result.chunks) > BATCH_BYTES
+    pairs: list[tuple[mcapfile.ChunkRef, bytes]] = []
+    size = 0
+    for ref, data in mcapfile.iter_chunk_data(result, start, end):
+        pairs.append((ref, data))
+        size += len(data)
+        if streaming and size >= BATCH_BYTES:
+            yield _joined(pairs), True
+            pairs, size = [], 0
+    if streaming:
+        if pairs:
+            yield _joined(pairs), True
+        return
+    chunks = _joined(pairs)
+    if cache is not None and cache.used + len(chunks.joined) <= cache.budget:
         cache.data[key] = chunks
-        cache.used += len(joined)
-    return chunks
+        cache.used += len(chunks.joined)
+    yield chunks, False
 
 
 def _from_index(result: mcapfile.McapScan, chunks: _FileChunks, by_id: dict[int, str]) -> dict[str, Segment] | None:
