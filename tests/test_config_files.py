@@ -19,8 +19,8 @@ TABLES = [
     ('smarticle_tracking', 'tracker.yaml', 'smarticle_tracking.parameters', 'TRACKER_NODE', 'TRACKER_PARAMS'),
     ('smarticle_tracking', 'glider_monitor.yaml', 'smarticle_tracking.parameters', 'MONITOR_NODE',
      'MONITOR_PARAMS'),
-    ('bags/smarticle_bags', 'recorder.yaml', 'smarticle_bags.settings', 'RECORDER_NODE', 'RECORDER_PARAMS'),
-    ('bags/smarticle_bags', 'player.yaml', 'smarticle_bags.settings', 'PLAYER_NODE', 'PLAYER_PARAMS'),
+    ('bags/smarticle_bags', 'recorder.yaml', 'smarticle_bags.parameters', 'RECORDER_NODE', 'RECORDER_PARAMS'),
+    ('bags/smarticle_bags', 'player.yaml', 'smarticle_bags.parameters', 'PLAYER_NODE', 'PLAYER_PARAMS'),
 ]
 
 

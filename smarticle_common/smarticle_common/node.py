@@ -4,7 +4,7 @@ The one module of ``smarticle_common`` that imports rclpy. A node is built the r
 everything created in the constructor) and started with ``run_node``::
 
     def main(args: list[str] | None = None) -> None:
-        run_node(GaitNode, NODE_NAME, args)
+        raise SystemExit(run_node(GaitNode, NODE_NAME, args))
 """
 
 from __future__ import annotations
@@ -75,8 +75,8 @@ class DiagnosticsPublisher:
 
 
 def run_node(factory: Callable[[], Node], node_name: str, args: list[str] | None = None,
-             startup_errors: tuple[type[BaseException], ...] = (ParameterError,)) -> None:
-    """Run a node the Jazzy way: init, spin until Ctrl-C or shutdown, destroy, try_shutdown.
+             startup_errors: tuple[type[BaseException], ...] = (ParameterError,)) -> int:
+    """Run a node the Jazzy way (init, spin until Ctrl-C or shutdown, destroy, try_shutdown); return the exit code.
 
     A node with a ``run(executor) -> int`` method drives its own loop (the sim bridge's lock-step) and
     its return value is the exit code; any other node is spun. An error of ``startup_errors`` raised
@@ -111,5 +111,4 @@ def run_node(factory: Callable[[], Node], node_name: str, args: list[str] | None
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()
-    if code:
-        raise SystemExit(code)
+    return code

@@ -28,6 +28,12 @@ def quaternion_heading(qx: float, qy: float, qz: float, qw: float) -> float:
     return math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
 
 
+def quaternion_headings(qx: np.ndarray, qy: np.ndarray, qz: np.ndarray, qw: np.ndarray) -> np.ndarray:
+    """``quaternion_heading`` over arrays of quaternion components."""
+    heading: np.ndarray = np.arctan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+    return heading
+
+
 def body_heading(qx: float, qy: float, qz: float, qw: float) -> float:
     """Heading of the body normal in [-pi, pi) from a robot base's (x, y, z, w) quaternion."""
     return (quaternion_heading(qx, qy, qz, qw) + _HALF_PI + math.pi) % _TWO_PI - math.pi
@@ -36,7 +42,7 @@ def body_heading(qx: float, qy: float, qz: float, qw: float) -> float:
 def body_headings_and_tilts(quat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Headings of the body normals in [-pi, pi) and tilts from vertical (rad) from (N, 4) xyzw quaternions."""
     qx, qy, qz, qw = quat.T
-    yaw = np.arctan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+    yaw = quaternion_headings(qx, qy, qz, qw)
     heading = (yaw + _HALF_PI + math.pi) % _TWO_PI - math.pi
     cos_tilt = np.clip(1.0 - 2.0 * (qx * qx + qy * qy), -1.0, 1.0)
     return heading, np.arccos(cos_tilt)

@@ -151,7 +151,7 @@ class GaitNode(Node):
 
 def main(args: list[str] | None = None) -> None:
     """Entry point of `ros2 run smarticle_driver gait`."""
-    run_node(GaitNode, NODE_NAME, args, startup_errors=(ParameterError,))
+    raise SystemExit(run_node(GaitNode, NODE_NAME, args, startup_errors=(ParameterError,)))
 
 if __name__ == '__main__':
     main()

@@ -151,7 +151,7 @@ class ServoBridgeNode(Node):
 
 def main(args: list[str] | None = None) -> None:
     """Entry point of `ros2 run smarticle_driver servo_bridge`."""
-    run_node(ServoBridgeNode, NODE_NAME, args, startup_errors=(ParameterError, DriverError))
+    raise SystemExit(run_node(ServoBridgeNode, NODE_NAME, args, startup_errors=(ParameterError, DriverError)))
 
 if __name__ == '__main__':
     main()

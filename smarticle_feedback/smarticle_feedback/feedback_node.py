@@ -98,7 +98,7 @@ class FeedbackNode(Node):
 
 def main(args: list[str] | None = None) -> None:
     """Entry point of `ros2 run smarticle_feedback feedback`."""
-    run_node(FeedbackNode, NODE_NAME, args, startup_errors=(ParameterError,))
+    raise SystemExit(run_node(FeedbackNode, NODE_NAME, args, startup_errors=(ParameterError,)))
 
 if __name__ == '__main__':
     main()

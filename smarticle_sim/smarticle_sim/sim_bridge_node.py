@@ -255,7 +255,7 @@ class SimBridgeNode(Node):
 
 def main(args: list[str] | None = None) -> None:
     """Entry point of `ros2 run smarticle_sim sim_bridge`."""
-    run_node(SimBridgeNode, NODE_NAME, args)
+    raise SystemExit(run_node(SimBridgeNode, NODE_NAME, args))
 
 
 if __name__ == '__main__':

@@ -155,7 +155,7 @@ class GliderMonitorNode(Node):
 
 def main(args: list[str] | None = None) -> None:
     """Entry point of `ros2 run smarticle_tracking glider_monitor`."""
-    run_node(GliderMonitorNode, MONITOR_NODE, args, startup_errors=(ParameterError,))
+    raise SystemExit(run_node(GliderMonitorNode, MONITOR_NODE, args, startup_errors=(ParameterError,)))
 
 if __name__ == '__main__':
     main()

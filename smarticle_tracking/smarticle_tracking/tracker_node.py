@@ -133,7 +133,7 @@ class TrackerNode(Node):
 
 def main(args: list[str] | None = None) -> None:
     """Entry point of `ros2 run smarticle_tracking tracker`."""
-    run_node(TrackerNode, TRACKER_NODE, args, startup_errors=(ParameterError,))
+    raise SystemExit(run_node(TrackerNode, TRACKER_NODE, args, startup_errors=(ParameterError,)))
 
 if __name__ == '__main__':
     main()

@@ -9,7 +9,7 @@ import pytest
 from smarticle_bags import cli
 from smarticle_bags.writer import BagWriter, WriterOptions
 
-from .helpers import STORE, T0
+from tests.helpers.bags import STORE, T0
 
 
 def glider_poses(i: int, dt: float) -> bytes:

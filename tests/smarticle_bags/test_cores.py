@@ -9,6 +9,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from smarticle_common.poses import quaternion_heading
+from smarticle_common.runs import load_npz
 
 from smarticle_bags import arrays, cli
 from smarticle_bags.errors import OptionError, TopicSelectionError
@@ -18,7 +20,7 @@ from smarticle_bags.playback import PlaybackClock, PlaybackOptions, window
 from smarticle_bags.reader import BagReader
 from smarticle_bags.selection import TopicFilter, parse_remaps
 
-from .helpers import JOINTS, POSES, T0, make_bag
+from tests.helpers.bags import JOINTS, POSES, T0, make_bag
 
 CONFIG = Path(__file__).resolve().parents[2] / 'bags' / 'smarticle_bags' / 'config'
 
@@ -73,7 +75,7 @@ def test_arrays(tmp_path: Path) -> None:
     joints = arrays.read_robot_topic(reader, 'joint_states')
     assert list(joints) == [0] and joints[0].names == ('arm1', 'arm2')
     assert joints[0].position[4, 1] == pytest.approx(-0.04) and np.isnan(joints[0].effort).all()
-    assert arrays.yaw_of(0.0, 0.0, math.sin(0.5), math.cos(0.5)) == pytest.approx(1.0)
+    assert quaternion_heading(0.0, 0.0, math.sin(0.5), math.cos(0.5)) == pytest.approx(1.0)
 
 
 def test_export_and_info(tmp_path: Path) -> None:
@@ -91,6 +93,19 @@ def test_export_and_info(tmp_path: Path) -> None:
     assert 'Messages:          20' in text and 'Storage id:        mcap' in text
     assert re.search(r'Topic: /smarticles/poses +\| Type: geometry_msgs/msg/PoseArray +\| Count: 10 \| '
                      r'Serialization Format: cdr', text)
+
+
+def test_export_run_writes_the_one_run_format(tmp_path: Path) -> None:
+    """The bag's poses come out as a run file that load_npz reads like a batch trial's."""
+    make_bag(tmp_path / 'bag', 10)
+    with pytest.raises(SystemExit) as ended:
+        cli.main(['export', str(tmp_path / 'bag'), '-o', str(tmp_path / 'csv'), '--run', str(tmp_path / 'run.npz')])
+    assert ended.value.code == 0
+    run = load_npz(tmp_path / 'run.npz')
+    poses = arrays.read_poses(BagReader(tmp_path / 'bag'))
+    assert np.array_equal(run.poses, poses.xyh, equal_nan=True)
+    assert run.time[0] == 0.0 and np.allclose(run.time, poses.stamp - poses.stamp[0])
+    assert np.isnan(run.arm_angles).all() and not run.meta['fsr_recorded']
 
 
 def test_cli_errors_and_info(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -13,7 +13,7 @@ from smarticle_bags.errors import BagNotFoundError, CorruptBagError, MetadataErr
 from smarticle_bags.reader import BagReader
 from smarticle_bags.reindex import reindex
 
-from .helpers import JOINTS, POSES, make_bag
+from tests.helpers.bags import JOINTS, POSES, make_bag
 
 
 def _cut(path: Path, keep: float) -> None:
@@ -89,7 +89,13 @@ def test_reindex_repairs_and_rebuilds(tmp_path: Path) -> None:
 
     _cut(tmp_path / 'bag' / 'bag_0.mcap', 0.5)
     salvaged = sum(1 for _ in BagReader(tmp_path / 'bag').messages())
-    report = reindex(tmp_path / 'bag')
+    untouched = (tmp_path / 'bag' / 'bag_0.mcap').read_bytes()
+    beside = reindex(tmp_path / 'bag')  # default: the repaired bag goes beside the original
+    assert beside.output == tmp_path / 'bag.repaired' and beside.repaired
+    assert (tmp_path / 'bag' / 'bag_0.mcap').read_bytes() == untouched
+    assert BagReader(beside.output, strict=True).info.message_count == salvaged
+    assert 'dropped:' in (beside.output / 'reindex_report.txt').read_text()
+    report = reindex(tmp_path / 'bag', replace=True)
     assert report.repaired and report.problems
     assert (tmp_path / 'bag' / 'bag_0.mcap.damaged').is_file()  # nothing recorded is deleted
     reader = BagReader(tmp_path / 'bag', strict=True)

@@ -15,7 +15,7 @@ from smarticle_bags.reindex import reindex
 from smarticle_bags.writer import BagWriter, WriterOptions
 
 from tests.helpers.ros import NodeProcesses, spin_until
-from .helpers import POSES, T0, pose_array
+from tests.helpers.bags import POSES, T0, pose_array
 
 pytestmark = pytest.mark.integration
 
@@ -27,12 +27,13 @@ def _reliable() -> Any:
     return QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 
 
-def _start_recording(nodes: NodeProcesses, ros_node: Callable[[str], Any], out: Path) -> tuple[Any, Any, Any]:
+def _start_recording(nodes: NodeProcesses, ros_node: Callable[[str], Any], out: Path,
+                     *extra: str) -> tuple[Any, Any, Any]:
     """Start a recorder of TOPIC and a test publisher; return (process, node, publisher) once matched."""
     from sensor_msgs.msg import JointState
 
     proc = nodes.start('smarticle-bag', 'record', TOPIC, '-o', str(out), '--flush-interval', '0.2',
-                       '--polling-interval', '0.1')
+                       '--polling-interval', '0.1', *extra)
     node = ros_node('bag_test_publisher')
     publisher = node.create_publisher(JointState, TOPIC, _reliable())
     matched = spin_until(node, lambda: publisher.get_subscription_count() > 0, 20.0)
@@ -78,9 +79,37 @@ def test_killed_recorder_leaves_readable_bag(nodes: NodeProcesses, ros_node: Cal
     assert reader.problems
     stamps = [msg.header.stamp.sec for _, msg in reader.decoded([TOPIC])]
     assert stamps == list(range(60))
-    report = reindex(out)
+    report = reindex(out, replace=True)
     assert report.repaired
     assert BagReader(out, strict=True).info.message_count == 60
+
+
+def test_killed_split_recording(nodes: NodeProcesses, ros_node: Callable[[str], Any], tmp_path: Path) -> None:
+    from rosbags.rosbag2 import Reader
+
+    out = tmp_path / 'split'
+    proc, node, publisher = _start_recording(nodes, ros_node, out, '--max-bag-duration', '0.5')
+    for i in range(120):
+        publisher.publish(_joint_state(i))
+        spin_until(node, lambda: False, 0.015)
+    time.sleep(0.8)  # several flush intervals: everything so far is on disk
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait(timeout=5)
+    files = sorted(out.glob('*.mcap'), key=lambda p: int(p.stem.rsplit('_', 1)[1]))
+    assert len(files) >= 3, nodes.output(proc)
+    for index, path in enumerate(files[:-1]):  # closed files: complete, rosbags reads them as they are
+        single = tmp_path / f'single_{index}'
+        single.mkdir()
+        single.joinpath(path.name).write_bytes(path.read_bytes())
+        assert not reindex(single).repaired
+        with Reader(single) as other:
+            assert other.message_count > 0
+    reader = BagReader(out)  # one bag over all files, the last one salvaged
+    stamps = [msg.header.stamp.sec for _, msg in reader.decoded([TOPIC])]
+    assert stamps == list(range(120))
+    reindex(out, replace=True)
+    with Reader(out) as other:
+        assert other.message_count == 120
 
 
 def test_player_timing_and_unknown_type(nodes: NodeProcesses, ros_node: Callable[[str], Any],
@@ -119,6 +148,32 @@ def test_player_timing_and_unknown_type(nodes: NodeProcesses, ros_node: Callable
     assert max(abs(g - 0.025) for g in gaps) < 0.1
     log = nodes.output(proc)
     assert 'skipping /mystery: unknown message type mystery_msgs/msg/Thing' in log
+
+
+def test_player_plays_a_split_bag_as_one(nodes: NodeProcesses, ros_node: Callable[[str], Any],
+                                         tmp_path: Path) -> None:
+    from geometry_msgs.msg import PoseArray
+
+    bag = tmp_path / 'split'
+    step = 50_000_000
+    with BagWriter(bag, WriterOptions(chunk_size=4000, max_bag_duration=500_000_000)) as writer:
+        writer.add_topic(POSES, 'geometry_msgs/msg/PoseArray')
+        for i in range(30):
+            writer.write(POSES, pose_array(i), T0 + i * step)
+    assert len(BagReader(bag).info.files) == 3
+    node = ros_node('bag_split_subscriber')
+    received: list[int] = []
+    node.create_subscription(PoseArray, POSES, lambda msg: received.append(msg.header.stamp.sec), _reliable())
+    proc = nodes.start('smarticle-bag', 'play', str(bag), '-r', '4.0', '--start-paused')
+    from std_msgs.msg import Bool
+    pause = node.create_publisher(Bool, '/player/pause', _reliable())
+    assert spin_until(node, lambda: pause.get_subscription_count() > 0 and node.count_publishers(POSES) > 0,
+                      20.0), nodes.output(proc)
+    spin_until(node, lambda: False, 0.5)  # let both directions match
+    pause.publish(Bool(data=False))
+    assert spin_until(node, lambda: len(received) == 30, 30.0), nodes.output(proc)
+    assert proc.wait(timeout=10) == 0
+    assert received == list(range(30))
 
 
 def test_play_rejects_bad_rate_and_missing_topic(nodes: NodeProcesses, tmp_path: Path) -> None:

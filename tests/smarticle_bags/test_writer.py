@@ -14,7 +14,7 @@ from smarticle_bags.qos import QosRecord, load_profiles
 from smarticle_bags.reader import BagReader
 from smarticle_bags.writer import BagWriter, Compression, WriterOptions
 
-from .helpers import JOINTS, POSES, T0, make_bag, pose_array
+from tests.helpers.bags import JOINTS, POSES, T0, make_bag, pose_array
 
 
 def test_round_trip_our_reader(tmp_path: Path) -> None:

@@ -2,6 +2,10 @@
 
 Times come twice: ``log_time`` (when the recorder received the message) and ``stamp`` (the
 message's header stamp; sim time in simulation), both in seconds as float64.
+
+Poses, JointState topics (joint states, commands, FSR) and the clock are decoded column-wise, whole
+chunks at a time (``columnar``); ``columnar=False`` decodes message by message with ``mcap_ros2``
+(the same values, several times slower). Other types always go message by message.
 """
 
 from __future__ import annotations
@@ -13,8 +17,10 @@ from typing import Any, Iterable
 import numpy as np
 import numpy.typing as npt
 
+from smarticle_common.poses import quaternion_heading, quaternion_headings
 from smarticle_common import topics as contract
 
+from . import columnar as col
 from .reader import BagReader
 
 FloatArray = npt.NDArray[np.float64]
@@ -42,6 +48,14 @@ class JointSeries:
 
 
 @dataclass(frozen=True)
+class ClockSeries:
+    """The /clock topic: when each message was logged and the time it carries (both in s)."""
+
+    log_time: FloatArray
+    clock: FloatArray
+
+
+@dataclass(frozen=True)
 class DiagnosticsTable:
     """One row per DiagnosticStatus: times, name, hardware id, level, message, and its key/values."""
 
@@ -52,11 +66,6 @@ class DiagnosticsTable:
     level: npt.NDArray[np.int64]
     message: npt.NDArray[np.str_]
     values: dict[str, npt.NDArray[Any]]
-
-
-def yaw_of(qx: float, qy: float, qz: float, qw: float) -> float:
-    """Return the yaw (rotation about z, rad) of a quaternion."""
-    return math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
 
 
 def _stamp(msg: Any) -> float:
@@ -73,7 +82,7 @@ def poses_from_messages(items: Iterable[tuple[int, Any]]) -> PoseSeries:
         log_time.append(log_ns * 1e-9)
         stamp.append(_stamp(msg))
         rows.append([(p.position.x, p.position.y,
-                      yaw_of(p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w))
+                      quaternion_heading(p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w))
                      for p in msg.poses])
     width = max((len(r) for r in rows), default=0)
     xyh = np.full((len(rows), width, 3), np.nan)
@@ -139,17 +148,82 @@ def _decoded(reader: BagReader, topic: str) -> list[tuple[int, Any]]:
     return [(raw.log_time, msg) for raw, msg in reader.decoded([topic])]
 
 
-def read_poses(reader: BagReader, topic: str = contract.topic('poses')) -> PoseSeries:
+def _seconds(ns: npt.NDArray[np.int64]) -> FloatArray:
+    """Return nanosecond times as float64 seconds (as ``ns * 1e-9`` per message does)."""
+    return ns.astype(np.float64) * 1e-9
+
+
+def _columnar_ok(reader: BagReader, topics: Iterable[str], type_name: str) -> bool:
+    """True if every topic exists and has ``type_name`` (else the per-message path is used)."""
+    reader.check_topics(topics)
+    return all(reader.topics[t].type == type_name for t in topics)
+
+
+def poses_from_groups(item: col.TopicPayloads, groups: list[col.Group]) -> PoseSeries:
+    """Build a PoseSeries from the columnar groups of a PoseArray topic."""
+    rows = col.decoded_rows(groups)
+    width = max((g.layout.counts['poses'] for g in groups), default=0)
+    xyh = np.full((len(rows), width, 3), np.nan)
+    stamp = col.stamps_of(groups, len(item.log_time))[rows]
+    for group in groups:
+        count = group.layout.counts['poses']
+        if not count:
+            continue
+        at = np.searchsorted(rows, group.rows)
+        poses = group.values['poses']
+        qx, qy, qz, qw = poses[..., 3], poses[..., 4], poses[..., 5], poses[..., 6]
+        xyh[at, :count, 0] = poses[..., 0]
+        xyh[at, :count, 1] = poses[..., 1]
+        xyh[at, :count, 2] = quaternion_headings(qx, qy, qz, qw)
+    return PoseSeries(_seconds(item.log_time[rows]), stamp, xyh)
+
+
+def joints_from_groups(item: col.TopicPayloads, groups: list[col.Group]) -> JointSeries:
+    """Build a JointSeries from the columnar groups of a JointState topic (columns in first-seen order)."""
+    rows = col.decoded_rows(groups)
+    names: list[str] = []
+    for group in sorted(groups, key=lambda g: int(g.rows[0])):
+        names += [n for n in group.layout.names if n not in names]
+    column = {name: j for j, name in enumerate(names)}
+    data = np.full((3, len(rows), len(names)), np.nan)
+    for group in groups:
+        at = np.searchsorted(rows, group.rows)
+        for i, name in enumerate(group.layout.names):
+            for f, key in enumerate(('position', 'velocity', 'effort')):
+                if i < group.layout.counts[key]:
+                    data[f, at, column[name]] = group.values[key][:, i]
+                else:
+                    data[f, at, column[name]] = np.nan
+    stamp = col.stamps_of(groups, len(item.log_time))[rows]
+    return JointSeries(tuple(names), _seconds(item.log_time[rows]), stamp, data[0], data[1], data[2])
+
+
+def read_poses(reader: BagReader, topic: str = contract.topic('poses'), columnar: bool = True) -> PoseSeries:
     """Return the PoseArray topic (default ``/smarticles/poses``) as (T, N, 3) x, y, heading."""
+    if columnar and _columnar_ok(reader, [topic], col.POSE_ARRAY):
+        item = col.gather(reader, [topic])[topic]
+        return poses_from_groups(item, col.decode_groups(item))
     return poses_from_messages(_decoded(reader, topic))
 
 
-def read_joints(reader: BagReader, topic: str) -> JointSeries:
+def read_joints(reader: BagReader, topic: str, columnar: bool = True) -> JointSeries:
     """Return a JointState topic (joint states, joint commands or FSR) as arrays."""
+    if columnar and _columnar_ok(reader, [topic], col.JOINT_STATE):
+        item = col.gather(reader, [topic])[topic]
+        return joints_from_groups(item, col.decode_groups(item))
     return joints_from_messages(_decoded(reader, topic))
 
 
-def read_robot_topic(reader: BagReader, key: str) -> dict[int, JointSeries]:
+def read_clock(reader: BagReader, topic: str = '/clock') -> ClockSeries:
+    """Return a rosgraph_msgs/Clock topic: log time and clock time, in seconds."""
+    reader.check_topics([topic])
+    item = col.gather(reader, [topic])[topic]
+    groups = col.decode_groups(item)
+    rows = col.decoded_rows(groups)
+    return ClockSeries(_seconds(item.log_time[rows]), col.stamps_of(groups, len(item.log_time))[rows])
+
+
+def read_robot_topic(reader: BagReader, key: str, columnar: bool = True) -> dict[int, JointSeries]:
     """Return a per-robot JointState topic (``joint_states``, ``joint_commands``, ``fsr``) for every robot."""
     contract.spec_of(key)
     robots: dict[str, int] = {}
@@ -157,16 +231,21 @@ def read_robot_topic(reader: BagReader, key: str) -> dict[int, JointSeries]:
         parsed = contract.parse_robot_topic(name)
         if parsed is not None and parsed[1] == key:
             robots[name] = parsed[0]
+    order = sorted(robots, key=robots.__getitem__)
+    if columnar and _columnar_ok(reader, robots, col.JOINT_STATE):
+        gathered = col.gather(reader, list(robots))  # one pass over the bag for all robots
+        return {robots[name]: joints_from_groups(gathered[name], col.decode_groups(gathered[name]))
+                for name in order}
     items: dict[str, list[tuple[int, Any]]] = {name: [] for name in robots}
     if robots:  # one pass over the bag for all robots (each pass decompresses every chunk)
         for raw, msg in reader.decoded(list(robots)):
             items[raw.topic].append((raw.log_time, msg))
-    return {robots[name]: joints_from_messages(items[name]) for name in sorted(robots, key=robots.__getitem__)}
+    return {robots[name]: joints_from_messages(items[name]) for name in order}
 
 
-def read_fsr(reader: BagReader) -> dict[int, JointSeries]:
+def read_fsr(reader: BagReader, columnar: bool = True) -> dict[int, JointSeries]:
     """Return the FSR forces of every robot (``effort`` columns, in N, named by face)."""
-    return read_robot_topic(reader, 'fsr')
+    return read_robot_topic(reader, 'fsr', columnar)
 
 
 def read_gliders(reader: BagReader, topic: str = contract.topic('gliders')) -> DiagnosticsTable:

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from .errors import BagError
-from .settings import PLAYER_PARAMS, RECORDER_PARAMS, default
+from .parameters import PLAYER_PARAMS, RECORDER_PARAMS, default
 from smarticle_common.facts import GAIT_PERIOD
 
 PROG = 'smarticle-bag'
@@ -97,11 +97,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--strict', action='store_true', help='fail on a damaged file instead of salvaging it')
     _add_record(sub)
     _add_play(sub)
-    p = sub.add_parser('export', help='write the topics of a bag to CSV files',
+    p = sub.add_parser('export', help='write the topics of a bag to CSV files (and the poses as a run npz)',
                        description='Write each topic to <out>/<topic>.csv '
-                                   '(poses as x, y, heading per robot).')
+                                   '(poses as x, y, heading per robot); with --run, also the pose topic '
+                                   'as a run file in the format of batch trials and the demo '
+                                   '(smarticle_common.runs).')
     p.add_argument('bag', help='bag folder or .mcap file')
     p.add_argument('-o', '--out', required=True, type=Path, help='folder for the CSV files')
+    p.add_argument('--run', type=Path, default=None, metavar='FILE.npz',
+                   help='also write /smarticles/poses (or --pose-topic) as a run npz')
+    p.add_argument('--pose-topic', default='/smarticles/poses', help='PoseArray topic for --run')
     p.add_argument('--topics', nargs='+', default=None, metavar='TOPIC', help='export only these topics')
     p = sub.add_parser('analyze', help='glider analysis of the poses in a bag (smarticle_tracking)',
                        description='Feed the bag\'s poses to smarticle_tracking.gliders.')
@@ -111,10 +116,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--min-periods', type=int, default=30,
                    help='bound this many periods makes a glider (default 30, as in the paper)')
     p.add_argument('--plot', default=None, help='PNG of the gliders (default: <bag>_gliders.png)')
-    p = sub.add_parser('reindex', help='rebuild metadata.yaml from the .mcap files, repairing damaged ones',
-                       description='Rebuild metadata.yaml; a damaged .mcap is rewritten with every readable '
-                                   'message and the original is kept as <name>.mcap.damaged.')
+    p = sub.add_parser('check', help='verify every chunk CRC and record of a bag; list damaged chunks',
+                       description='Check every record and chunk (CRC) of a bag. Lists each damaged chunk '
+                                   'with its byte offset, log-time range and the messages lost per topic. '
+                                   'Exit code 0 if the bag is intact, 2 if anything is damaged.')
+    p.add_argument('bag', help='bag folder or .mcap file')
+    p = sub.add_parser('reindex', help='rebuild metadata.yaml from the .mcap files, salvaging damaged ones',
+                       description='Check every .mcap of a bag folder and rebuild metadata.yaml. A damaged '
+                                   'file is rebuilt from its intact chunks; the repaired bag goes to a new '
+                                   'folder <bag>.repaired beside the original (which is not touched) unless '
+                                   '--replace is given. reindex_report.txt says what was dropped.')
     p.add_argument('bag', help='bag folder')
+    p.add_argument('--replace', action='store_true',
+                   help='repair in place; each damaged original is kept as <name>.mcap.damaged')
+    p.add_argument('-o', '--output', type=Path, default=None,
+                   help='folder for the repaired bag (default <bag>.repaired)')
     return parser
 
 
@@ -148,8 +164,8 @@ def _play(ns: argparse.Namespace, ros_args: list[str] | None) -> int:
 def _analyze(ns: argparse.Namespace) -> int:
     """Feed the poses of a bag to the glider analysis (smarticle_tracking.gliders): table and plots."""
     try:
-        from smarticle_tracking.glider_plots import plot_glider_analysis
-        from smarticle_tracking.gliders import GliderConfig, analyse_gliders, format_glider_table, glider_table
+        from smarticle_tracking.gliders import GliderConfig
+        from smarticle_tracking.report import glider_report
     except ImportError as err:
         print(f'{PROG} analyze: the glider analysis (smarticle_tracking) is not available ({err}); '
               f'install smarticle_tracking or use "{PROG} export" and analyse the CSV files', file=sys.stderr)
@@ -163,15 +179,13 @@ def _analyze(ns: argparse.Namespace) -> int:
               file=sys.stderr)
         return 2
     config = GliderConfig(period=ns.period, min_periods=ns.min_periods)
-    analysis = analyse_gliders(poses.stamp - poses.stamp[0], poses.xyh, config)
-    rows = glider_table(analysis.gliders, config)
+    figure = Path(ns.plot) if ns.plot else Path(str(ns.bag).rstrip('/') + '_gliders.png')
+    report = glider_report(poses.stamp - poses.stamp[0], poses.xyh, config, figure)
     print(f'{ns.bag}: {poses.xyh.shape[1]} robots, {len(poses.stamp)} pose messages over '
           f'{poses.stamp[-1] - poses.stamp[0]:.1f} s; gliders bound >= {ns.min_periods} periods:')
-    print(format_glider_table(rows) if rows else '  none')
-    if analysis.gliders:
-        out = Path(ns.plot) if ns.plot else Path(str(ns.bag).rstrip('/') + '_gliders.png')
-        plot_glider_analysis(analysis, out)
-        print(f'wrote {out}')
+    print(report.table)
+    if report.figure is not None:
+        print(f'wrote {report.figure}')
     return 0
 
 
@@ -181,10 +195,15 @@ def main(argv: list[str] | None = None) -> None:
     ns = build_parser().parse_args(ours)
     logging.basicConfig(level=logging.WARNING, format=f'{PROG}: warning: %(message)s')
     try:
-        raise SystemExit(_dispatch(ns, ros_args))
+        code = _dispatch(ns, ros_args)
     except BagError as err:
         print(f'{PROG} {ns.command}: error: {err}', file=sys.stderr)
         raise SystemExit(2) from None
+    except OSError as err:
+        where = f' ({err.filename})' if err.filename else ''
+        print(f'{PROG} {ns.command}: error: {err.strerror or err}{where}', file=sys.stderr)
+        raise SystemExit(2) from None
+    raise SystemExit(code)
 
 
 def _dispatch(ns: argparse.Namespace, ros_args: list[str] | None) -> int:
@@ -203,18 +222,35 @@ def _dispatch(ns: argparse.Namespace, ros_args: list[str] | None) -> int:
         return 0
     if ns.command == 'export':
         from .export import export_bag
-        report = export_bag(BagReader(ns.bag), ns.out, ns.topics)
+        reader = BagReader(ns.bag)
+        report = export_bag(reader, ns.out, ns.topics)
         for topic, path in report.written.items():
             print(f'{topic} -> {path}')
         for topic, reason in report.skipped.items():
             print(f'{topic}: skipped ({reason})', file=sys.stderr)
+        if ns.run is not None:
+            from .export import export_run
+            print(f'{ns.pose_topic} -> {export_run(reader, ns.run, ns.pose_topic)}')
         return 0
+    if ns.command == 'check':
+        from .info import format_check
+        reader = BagReader(ns.bag, verify=True)
+        text, intact = format_check(reader)
+        print(text, end='')
+        return 0 if intact else 2
     from .reindex import reindex
-    report = reindex(ns.bag)
-    for line in report.problems:
+    repair = reindex(ns.bag, replace=ns.replace, output=ns.output)
+    for line in repair.problems:
         print(f'found: {line}')
-    for line in report.repaired:
+    for line in repair.dropped:
+        print(f'dropped: {line}')
+    for line in repair.repaired:
         print(f'repaired: {line}')
-    print(f'wrote {Path(ns.bag) / "metadata.yaml"}: {report.info.message_count} messages in '
-          f'{len(report.info.files)} files, {len(report.info.topics)} topics')
+    if repair.repaired:
+        print(repair.lost_line())
+    out = repair.output or Path(ns.bag)
+    print(f'wrote {out / "metadata.yaml"}: {repair.info.message_count} messages in '
+          f'{len(repair.info.files)} files, {len(repair.info.topics)} topics')
+    if repair.report_path is not None:
+        print(f'report: {repair.report_path}')
     return 0

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from . import arrays
+from .errors import BagError
 from .reader import BagReader
 
 MAX_ARRAY = 16
@@ -106,3 +107,16 @@ def export_bag(reader: BagReader, out: Path, topics: Iterable[str] | None = None
             path.unlink(missing_ok=True)
             report.skipped[topic] = reason
     return report
+
+
+def export_run(reader: BagReader, path: Path, topic: str = '/smarticles/poses') -> Path:
+    """Write ``topic``'s poses as a run file (``smarticle_common.runs``, the batch and demo format)."""
+    from smarticle_common.facts import BODY_LENGTH
+    from smarticle_common.runs import Recording, save_npz
+
+    poses = arrays.read_poses(reader, topic)
+    if len(poses.stamp) == 0:
+        raise BagError(f'{topic}: no pose messages to export')
+    run = Recording.from_poses(poses.stamp - poses.stamp[0], poses.xyh, BODY_LENGTH,
+                               {'source': f'bag {reader.path}, topic {topic}', 'stamp0': float(poses.stamp[0])})
+    return save_npz(run, path)

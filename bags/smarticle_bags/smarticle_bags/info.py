@@ -54,3 +54,34 @@ def format_info(reader: BagReader) -> str:
         lines.append('WARNING: the counts above come from metadata; '
                      'run "smarticle-bag reindex" to repair the bag')
     return '\n'.join(lines) + '\n'
+
+
+def format_check(reader: BagReader) -> tuple[str, bool]:
+    """Return the ``smarticle-bag check`` text of a bag opened with ``verify=True`` and whether it is intact."""
+    lines = []
+    intact = True
+    for result in reader.scans:
+        chunks = len(result.chunks) + len(result.damaged)
+        if not result.problems:
+            lines.append(f'{result.path}: OK: {result.message_count} messages in {chunks} chunks, '
+                         f'every CRC and record checked')
+            continue
+        intact = False
+        lines.append(f'{result.path}: DAMAGED: {len(result.damaged)} of {chunks} chunks damaged, '
+                     f'{result.message_count} messages readable')
+        for damaged in result.damaged:
+            lines.append(f'  {damaged.describe()}')
+        lines += [f'  {p}' for p in result.problems if not (p.startswith('chunk at byte') and 'is damaged' in p)]
+    if reader.path.is_dir():
+        listed = {f.path: f.message_count for f in reader.info.files}
+        for result in reader.scans:
+            name = result.path.relative_to(reader.path).as_posix()
+            if not result.problems and listed.get(name, result.message_count) != result.message_count:
+                intact = False
+                lines.append(f'{reader.path / "metadata.yaml"}: says {listed[name]} messages for {name}, the '
+                             f'file holds {result.message_count}')
+    lines += [f'{p}' for p in reader.unreadable]
+    intact = intact and not reader.unreadable
+    if not intact:
+        lines.append(f'run "smarticle-bag reindex {reader.path}" to salvage the intact chunks')
+    return '\n'.join(lines) + '\n', intact

@@ -140,7 +140,7 @@ def read_metadata(folder: Path) -> BagInfo:
             f'{folder} has no {METADATA_FILE}: not a rosbag2 bag folder, or a recording that never '
             f'finished; run "smarticle-bag reindex {folder}" to rebuild it from the .mcap files')
     try:
-        data = yaml.safe_load(path.read_text(encoding='utf-8'))
+        data = yaml.load(path.read_text(encoding='utf-8'), Loader=getattr(yaml, 'CSafeLoader', yaml.SafeLoader))
     except (OSError, yaml.YAMLError) as err:
         raise MetadataError(f'{path}: not valid YAML ({err}); run "smarticle-bag reindex {folder}"') from err
     where = str(path)

@@ -14,19 +14,20 @@ import time
 from typing import Any
 
 import rclpy
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rosgraph_msgs.msg import Clock
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from smarticle_common import topics as contract
-from smarticle_common.node import declare_and_read
+from smarticle_common.node import declare_and_read, run_node
 from smarticle_common.params import ParameterError
 
 from . import qos
 from .errors import BagError
 from .playback import PlaybackClock, window
 from .reader import BagReader, RawMessage
-from .settings import PLAYER_NODE, PLAYER_PARAMS, player_config
+from .parameters import PLAYER_NODE, PLAYER_PARAMS, player_config
 
 TICK = 0.001
 
@@ -151,7 +152,7 @@ class PlayerNode(Node):
         if self.clock_publisher is None or self.messages is None:
             return
         now = self.clock.now(time.monotonic_ns())
-        msg = self.clock_publisher.msg_type()
+        msg = Clock()
         msg.clock.sec, msg.clock.nanosec = divmod(now, 1_000_000_000)
         self.clock_publisher.publish(msg)
 
@@ -177,6 +178,12 @@ class PlayerNode(Node):
         if ' ' in self.keyboard.pressed():
             self.set_paused(not self.clock.paused)
 
+    def run(self, executor: SingleThreadedExecutor) -> int:
+        """Spin until the bag has been played (or ROS shuts down); return the exit code."""
+        while rclpy.ok() and not self.finished:
+            executor.spin_once(timeout_sec=0.1)
+        return 0
+
     def destroy_node(self) -> None:
         """Restore the terminal, then destroy the node."""
         self.keyboard.close()
@@ -184,25 +191,8 @@ class PlayerNode(Node):
 
 
 def run(overrides: dict[str, Any] | None = None, args: list[str] | None = None) -> int:
-    """Play a bag until it ends (or SIGINT); return the process exit code."""
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = PlayerNode(overrides)
-        executor = SingleThreadedExecutor()
-        executor.add_node(node)
-        while rclpy.ok() and not node.finished:
-            executor.spin_once(timeout_sec=0.1)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except (BagError, ParameterError) as err:
-        rclpy.logging.get_logger(PLAYER_NODE).error(str(err))
-        return 1
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    """Play a bag until it ends (or SIGINT); return the process exit code (2: bad settings or bag)."""
+    return run_node(lambda: PlayerNode(overrides), PLAYER_NODE, args, startup_errors=(ParameterError, BagError))
 
 
 def main(args: list[str] | None = None) -> None:

@@ -2,7 +2,8 @@
 
 Decoding uses ``mcap_ros2``'s decoder on the ``ros2msg`` schemas stored in the file, so bags made by
 rosbag2 and by this package read the same way, with no rclpy or message packages needed. Damaged
-files are salvaged (every complete chunk is read) with a warning, or rejected with ``strict=True``.
+files are salvaged (every intact chunk is read, every chunk's CRC checked as it is read) with a warning,
+or rejected with ``strict=True`` (which checks every chunk when the bag is opened).
 """
 
 from __future__ import annotations
@@ -71,8 +72,13 @@ def check_topics(requested: Iterable[str], available: Iterable[str], where: str)
 class BagReader:
     """A bag opened for reading; ``info`` is its metadata, ``messages`` and ``decoded`` its content."""
 
-    def __init__(self, path: Path | str, strict: bool = False) -> None:
+    def __init__(self, path: Path | str, strict: bool = False, verify: bool | None = None) -> None:
         self.path = Path(path)
+        check = strict if verify is None else verify
+        #: Decompressed chunks kept between passes of the columnar reader (``arrays.read_*``).
+        self.chunk_cache = mcapfile.ChunkCache()
+        #: Files of the bag that are not readable at all (skipped unless strict).
+        self.unreadable: list[str] = []
         if not self.path.exists():
             raise BagNotFoundError(f'bag {self.path} does not exist')
         if self.path.is_dir():
@@ -87,13 +93,24 @@ class BagReader:
                                     f'{", ".join(missing)}; run "smarticle-bag reindex {self.path}"')
             if not paths:
                 raise MetadataError(f'{self.path}: metadata.yaml lists no storage files')
-            self.scans = [mcapfile.scan(p) for p in paths]
+            self.scans = []
+            for file_path in paths:
+                try:
+                    self.scans.append(mcapfile.scan(file_path, check))
+                except CorruptBagError as err:
+                    if strict or len(paths) == 1:
+                        raise
+                    self.unreadable.append(str(err))
+                    _LOG.warning('%s; the file is skipped', err)
+            if not self.scans:
+                raise CorruptBagError(f'{self.path}: no readable storage file: {"; ".join(self.unreadable)}')
         elif self.path.suffix == '.mcap':
-            self.scans = [mcapfile.scan(self.path)]
+            self.scans = [mcapfile.scan(self.path, check)]
             self.info = info_from_scans(self.scans)
         else:
             raise BagError(f'{self.path} is neither a bag folder nor an .mcap file')
         for result in self.scans:
+            mcapfile.require_ros2(result)
             if result.profile not in ('ros2', ''):
                 _LOG.warning('%s: mcap profile is %r, not ros2', result.path, result.profile)
         if self.problems:
@@ -105,7 +122,7 @@ class BagReader:
     @property
     def problems(self) -> list[str]:
         """What is wrong with the files (empty for a healthy bag)."""
-        return [f'{r.path.name}: {p}' for r in self.scans for p in r.problems]
+        return [f'{r.path.name}: {p}' for r in self.scans for p in r.problems] + self.unreadable
 
     @property
     def topics(self) -> dict[str, TopicInfo]:
@@ -157,10 +174,12 @@ class BagReader:
             if decoder is None:
                 continue
             try:
-                yield raw, decoder(raw.data)
-            except (ValueError, IndexError, UnicodeDecodeError, TypeError) as err:
+                value = decoder(raw.data)
+            except Exception as err: # a generated decoder over bytes from disk
                 _LOG.warning('%s at t=%d: cannot decode %s message (%s); skipped', raw.topic, raw.log_time,
                              raw.type, err)
+                continue
+            yield raw, value
 
     @staticmethod
     def _decoder(factory: DecoderFactory, schema: Any, raw: RawMessage) -> Callable[[bytes], Any] | None:
@@ -171,7 +190,7 @@ class BagReader:
             return None
         try:
             return factory.decoder_for('cdr', schema)
-        except (ValueError, KeyError, IndexError, BagError, RuntimeError) as err:
+        except Exception as err: # mcap_ros2's parser of a definition read from disk
             _LOG.warning('%s: cannot parse the definition of %s (%s); its messages are skipped',
                          raw.topic, raw.type, err)
             return None

@@ -8,21 +8,21 @@ SIGKILL loses at most that much; SIGINT/SIGTERM close the bag properly.
 
 from __future__ import annotations
 
+import functools
+
 import time
 from typing import Any
 
-import rclpy
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from smarticle_common import topics as contract
-from smarticle_common.node import declare_and_read
+from smarticle_common.node import declare_and_read, run_node
 from smarticle_common.params import ParameterError
 
 from . import qos
 from .errors import BagError
-from .settings import RECORDER_NODE, RECORDER_PARAMS, recorder_config
+from .parameters import RECORDER_NODE, RECORDER_PARAMS, recorder_config
 from .writer import BagWriter
 
 
@@ -70,7 +70,7 @@ class RecorderNode(Node):
             self.get_logger().warning(f'not recording {name}: unknown message type {type_name} ({err})')
             return
         self.recording[name] = self.create_subscription(
-            msg_class, name, lambda data, topic=name: self.on_message(topic, data),
+            msg_class, name, functools.partial(self.on_message, name),
             qos.subscription_profile(offered), raw=True)
         self.get_logger().info(f'subscribed to {name} ({type_name})')
 
@@ -91,22 +91,8 @@ class RecorderNode(Node):
 
 
 def run(overrides: dict[str, Any] | None = None, args: list[str] | None = None) -> int:
-    """Run the recorder until SIGINT/SIGTERM; return the process exit code."""
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = RecorderNode(overrides)
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except (BagError, ParameterError) as err:
-        rclpy.logging.get_logger(RECORDER_NODE).error(str(err))
-        return 1
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    """Run the recorder until SIGINT/SIGTERM; return the process exit code (2: bad settings or bag)."""
+    return run_node(lambda: RecorderNode(overrides), RECORDER_NODE, args, startup_errors=(ParameterError, BagError))
 
 
 def main(args: list[str] | None = None) -> None:

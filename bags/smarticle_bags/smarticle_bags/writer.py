@@ -213,7 +213,7 @@ class BagWriter:
         name = file_name(self.folder, len(self.info.files))
         stream = _DirectFile(self.folder / name)
         mcap = McapWriter(stream, chunk_size=self.options.chunk_size,  # type: ignore[arg-type]
-                          compression=self.options.compression.mcap_type)
+                          compression=self.options.compression.mcap_type, enable_data_crcs=True)
         mcap.start(profile='ros2', library=LIBRARY)
         storage = _StorageFile(stream=stream, mcap=mcap, info=FileInfo(path=name))
         self.info.files.append(storage.info)
