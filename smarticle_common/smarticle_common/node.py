@@ -14,7 +14,8 @@ from typing import Any, TypeVar
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from rcl_interfaces.msg import ParameterDescriptor
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 
@@ -27,13 +28,37 @@ OK, WARN, ERROR = 0, 1, 2
 Config = TypeVar('Config')
 
 
+def descriptor_of(spec: ParamSpec) -> ParameterDescriptor:
+    """The ROS descriptor of ``spec``: its description, its range, and read-only unless it may change at run time.
+
+    Parameters are read once into a frozen config, so a change at run time could not take effect: ROS
+    refuses ``ros2 param set`` on them with "read-only" instead of accepting and ignoring it. A value out
+    of a declared range is refused by ROS with the range.
+    """
+    descriptor = ParameterDescriptor(description=spec.description, read_only=not spec.runtime)
+    if spec.minimum is not None and spec.maximum is not None and not isinstance(spec.default, bool):
+        if isinstance(spec.default, int):
+            descriptor.integer_range = [IntegerRange(from_value=int(spec.minimum), to_value=int(spec.maximum),
+                                                     step=0)]
+        elif isinstance(spec.default, float):
+            descriptor.floating_point_range = [FloatingPointRange(from_value=float(spec.minimum),
+                                                                  to_value=float(spec.maximum), step=0.0)]
+    return descriptor
+
+
 def declare_and_read(node: Any, specs: tuple[ParamSpec, ...]) -> dict[str, Any]:
     """Declare ``specs`` on an rclpy node and return their checked values by name (ParameterError if bad)."""
     values: dict[str, Any] = {}
+    where = f'node {node.get_name()} parameter'
     for spec in specs:
-        descriptor = ParameterDescriptor(description=spec.description)
-        param = node.declare_parameter(spec.name, spec.default, descriptor)
-        values[spec.name] = spec.check(param.value, f'node {node.get_name()} parameter')
+        try:
+            param = node.declare_parameter(spec.name, spec.default, descriptor_of(spec))
+        except InvalidParameterValueException as err:
+            raise ParameterError(f'{where} {spec.name!r}: must lie between the minimum {spec.minimum} and the '
+                                 f'maximum {spec.maximum} ({err})') from None
+        except InvalidParameterTypeException as err:
+            raise ParameterError(f'{where} {spec.name!r}: expected {type(spec.default).__name__} ({err})') from None
+        values[spec.name] = spec.check(param.value, where)
     return values
 
 

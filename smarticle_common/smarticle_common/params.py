@@ -26,6 +26,8 @@ class ParamSpec:
     description: str
     minimum: float | None = None
     maximum: float | None = None
+    #: True if the node applies a change at run time; every other parameter is read-only once declared.
+    runtime: bool = False
 
     def check(self, value: Any, source: str = 'parameter') -> Any:
         """Return ``value`` if it has the default's type and lies in range, else raise ParameterError."""
