@@ -15,9 +15,10 @@ from typing import Any, TypeVar
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
-from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
+from rclpy.exceptions import InvalidParameterTypeException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 
 from . import topics
 from .params import ParameterError, ParamSpec
@@ -35,7 +36,8 @@ def descriptor_of(spec: ParamSpec) -> ParameterDescriptor:
     refuses ``ros2 param set`` on them with "read-only" instead of accepting and ignoring it. A value out
     of a declared range is refused by ROS with the range.
     """
-    descriptor = ParameterDescriptor(description=spec.description, read_only=not spec.runtime)
+    descriptor = ParameterDescriptor(description=spec.description, read_only=not spec.runtime,
+                                     type=Parameter.Type.from_parameter_value(spec.default).value)
     if spec.minimum is not None and spec.maximum is not None and not isinstance(spec.default, bool):
         if isinstance(spec.default, int):
             descriptor.integer_range = [IntegerRange(from_value=int(spec.minimum), to_value=int(spec.maximum),
@@ -47,18 +49,21 @@ def descriptor_of(spec: ParamSpec) -> ParameterDescriptor:
 
 
 def declare_and_read(node: Any, specs: tuple[ParamSpec, ...]) -> dict[str, Any]:
-    """Declare ``specs`` on an rclpy node and return their checked values by name (ParameterError if bad)."""
+    """Declare ``specs`` on an rclpy node and return their checked values by name (ParameterError if bad).
+
+    Each value is checked by its ``ParamSpec`` first (the message names the parameter and the bound it
+    breaks), then the full descriptor (range, read-only) is applied.
+    """
     values: dict[str, Any] = {}
     where = f'node {node.get_name()} parameter'
     for spec in specs:
         try:
-            param = node.declare_parameter(spec.name, spec.default, descriptor_of(spec))
-        except InvalidParameterValueException as err:
-            raise ParameterError(f'{where} {spec.name!r}: must lie between the minimum {spec.minimum} and the '
-                                 f'maximum {spec.maximum} ({err})') from None
+            param = node.declare_parameter(spec.name, spec.default,
+                                           ParameterDescriptor(description=spec.description))
         except InvalidParameterTypeException as err:
             raise ParameterError(f'{where} {spec.name!r}: expected {type(spec.default).__name__} ({err})') from None
         values[spec.name] = spec.check(param.value, where)
+        node.set_descriptor(spec.name, descriptor_of(spec))
     return values
 
 
