@@ -50,6 +50,15 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def report_graph(names: list[str], path: Path) -> None:
+    """Print the ROS graph seen during the run and write it to ``path``; name any node name used twice."""
+    seen = sorted(names)
+    twice = sorted({n for n in seen if seen.count(n) > 1})
+    path.write_text('\n'.join(seen) + '\n', encoding='utf-8')
+    print(f'[demo] ROS graph: {len(seen)} nodes, ' + (f'names used twice: {", ".join(twice)}' if twice else
+                                                       'every fully qualified name distinct') + f' ({path})')
+
+
 def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.ndarray, float]:
     """Run sim bridge + gait nodes; return sample times (s after the start), poses (T, N, 3), RTF."""
     import os
@@ -111,10 +120,11 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
             for k in range(args.robots):
                 gait = robots[k].gait
                 phase = gait.phase if gait is not None else 0.0
-                group.start('gait', '--ros-args', '-p', f'robot_id:={k}', '-p', 'lockstep:=true',
+                namespace = ['-r', f'__ns:={topics.robot_namespace(k)}']   # /smarticle_k/gait, robot k
+                group.start('gait', '--ros-args', *namespace, '-p', 'lockstep:=true',
                             '-p', 'use_sim_time:=true', '-p', f'phase:={phase!r}', *common)
                 if args.feedback:
-                    group.start('feedback', '--ros-args', '-p', f'robot_id:={k}', '-p', 'use_sim_time:=true',
+                    group.start('feedback', '--ros-args', *namespace, '-p', 'use_sim_time:=true',
                                 '-p', f'period:={period}', '-p', f'phase:={phase!r}', '-p', f'start_at:={START_AT}')
             group.start('glider_monitor', '--ros-args', '-p', 'use_sim_time:=true', '-p', f't0:={START_AT}',
                         '-p', f'min_periods:={args.min_periods}', '-p', 'show_arms:=false')
@@ -128,8 +138,13 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
                   f'{duration:.1f} s', flush=True)
             wall0 = time.monotonic()
             last = wall0
+            graph: list[str] = []
+            expected_nodes = args.robots * (2 if args.feedback else 1) + 4   # + bridge, monitor, recorder, us
             while bridge.poll() is None:
                 rclpy.spin_once(node, timeout_sec=0.05)
+                if samples and len(graph) < expected_nodes:     # keep the fullest view of the graph
+                    now_seen = [f'{ns.rstrip("/")}/{name}' for name, ns in node.get_node_names_and_namespaces()]
+                    graph = now_seen if len(now_seen) > len(graph) else graph
                 if time.monotonic() - last > 5.0 and samples:
                     last = time.monotonic()
                     sim = max(samples) * 1e-9
@@ -146,6 +161,7 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
                   f'(smarticle-bag info {bag})')
             if args.feedback:
                 print('[demo] feedback halts per robot: ' + ', '.join(f'{k}: {n}' for k, n in enumerate(halts)))
+            report_graph(graph, log_dir.parent / 'nodes.txt')
             report = live.get('gliders')
             pairs = [status.name for status in report.status] if report is not None else []
             print(f'[demo] live glider monitor, last report: {len(pairs)} bound pair(s) '

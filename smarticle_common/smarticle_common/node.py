@@ -82,6 +82,23 @@ def read_config(node: Any, specs: tuple[ParamSpec, ...], build: Callable[[dict[s
         raise ParameterError(f'node {node.get_name()}: {err}') from err
 
 
+def resolve_robot_id(node: Any, robot_id: int) -> int:
+    """The robot a per-robot node serves: its ``robot_id`` parameter and its namespace must agree.
+
+    Started as ``--ros-args -r __ns:=/smarticle_3`` the node serves robot 3 (its fully qualified name is
+    ``/smarticle_3/<name>``, so seven gait nodes never share a name); ``robot_id`` -1 follows the namespace,
+    and outside a ``/smarticle_<k>`` namespace it means robot 0. ParameterError if the two disagree.
+    """
+    namespace = node.get_namespace()
+    from_namespace = topics.robot_of_namespace(namespace)
+    if robot_id < 0:
+        return 0 if from_namespace is None else from_namespace
+    if from_namespace is not None and from_namespace != robot_id:
+        raise ParameterError(f'node {node.get_fully_qualified_name()}: robot_id {robot_id} disagrees with its '
+                             f'namespace {namespace} (robot {from_namespace}); give one or the other')
+    return robot_id
+
+
 class DiagnosticsPublisher:
     """A node's status on /diagnostics: one DiagnosticStatus (name, hardware id) with key/value counters."""
 

@@ -12,6 +12,8 @@ from typing import Any
 
 import yaml
 
+from . import topics
+
 
 class ParameterError(ValueError):
     """A parameter value that is missing, of the wrong type or out of range."""
@@ -60,3 +62,9 @@ def read_defaults_yaml(path: str, node_name: str) -> dict[str, Any]:
         if isinstance(data, dict) and key in data:
             return dict(data[key]['ros__parameters'])
     raise ParameterError(f'{path}: no section {node_name!r} with ros__parameters')
+
+
+#: The robot_id parameter of per-robot nodes: -1 takes the id from the node's namespace.
+ROBOT_ID_PARAM = ParamSpec('robot_id', -1, 'robot id k: topics live under /smarticle_<k>; -1 = the k of the '
+                           "node's namespace /smarticle_<k> (0 outside one); a value that disagrees with the "
+                           'namespace is refused', -1, topics.MAX_ROBOT_ID)

@@ -82,6 +82,18 @@ def validate_robot_id(robot_id: Any) -> int:
 
 
 _R = '/smarticle_{k}'
+_NAMESPACE = re.compile(r'^/smarticle_(\d+)$')
+
+
+def robot_namespace(robot_id: int) -> str:
+    """The namespace of robot ``robot_id``'s nodes (``/smarticle_<k>``, the prefix of its topics)."""
+    return _R.format(k=validate_robot_id(robot_id))
+
+
+def robot_of_namespace(namespace: str) -> int | None:
+    """The robot id of a ``/smarticle_<k>`` namespace, or None for any other namespace."""
+    match = _NAMESPACE.match(namespace)
+    return validate_robot_id(int(match.group(1))) if match else None
 
 TOPICS: tuple[TopicSpec, ...] = (
     TopicSpec('joint_commands', _R + '/joint_commands', 'sensor_msgs/msg/JointState', Qos.COMMAND,

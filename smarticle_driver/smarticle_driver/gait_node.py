@@ -15,13 +15,13 @@ from rclpy.time import Time
 from smarticle_common import topics
 from smarticle_common.facts import GAIT_PERIOD, SERVO_SPEED
 from smarticle_common.gait import GaitCommand, GaitConfig, SquareGait
-from smarticle_common.node import read_config, run_node
-from smarticle_common.params import ParamSpec, ParameterError
+from smarticle_common.node import read_config, resolve_robot_id, run_node
+from smarticle_common.params import ROBOT_ID_PARAM, ParameterError, ParamSpec
 
 NODE_NAME = 'gait'
 
 PARAMS: tuple[ParamSpec, ...] = (
-    ParamSpec('robot_id', 0, 'robot id k: topics live under /smarticle_<k>', 0, topics.MAX_ROBOT_ID),
+    ROBOT_ID_PARAM,
     ParamSpec('alpha_max_deg', 90.0, 'square-gait amplitude alpha_max in degrees (5 to 120)', 5.0, 120.0),
     ParamSpec('period', GAIT_PERIOD, 'gait period T in seconds', 0.05, 60.0),
     ParamSpec('servo_speed', SERVO_SPEED, 'servo speed limit in rad/s', 0.1, 100.0),
@@ -50,7 +50,7 @@ class GaitNode(Node):
     def __init__(self) -> None:
         super().__init__(NODE_NAME)
         config, values = read_config(self, PARAMS, lambda v: (config_from_params(v), v))
-        self.robot_id: int = values['robot_id']
+        self.robot_id = resolve_robot_id(self, values['robot_id'])
         self.gait = SquareGait(config)
         self.heartbeat = Time(seconds=values['heartbeat']).nanoseconds
         self.autostart: bool = values['autostart']

@@ -29,7 +29,7 @@ from smarticle_driver.board_calibration import (FsrModel, ServoCalibration, defa
                                           load_fsr_calibration, load_servo_calibration)
 from smarticle_driver.errors import BridgeConfigError, PortUnavailable, ReplyError
 from smarticle_common.facts import SERVO_SPEED
-from smarticle_common.params import ParamSpec
+from smarticle_common.params import ROBOT_ID_PARAM, ParamSpec
 from smarticle_driver.serial_link import SerialLink
 from smarticle_driver.slew import SlewModel
 
@@ -42,7 +42,7 @@ PULSE_EPSILON = 0.125
 _CH = (0, 23)
 
 PARAMS: tuple[ParamSpec, ...] = (
-    ParamSpec('robot_id', 0, 'robot id k: topics live under /smarticle_<k>', 0, topics.MAX_ROBOT_ID),
+    ROBOT_ID_PARAM,
     ParamSpec('board', 'maestro', f'servo board protocol, one of: {", ".join(BOARD_KINDS)}'),
     ParamSpec('port', '/dev/ttyACM0', 'serial port of the board (Maestro command port; smarticle-fake-board '
               'prints its own)'),
@@ -115,7 +115,7 @@ class BridgeConfig:
     def from_values(cls, values: dict[str, Any]) -> BridgeConfig:
         """Build the config from checked parameter values (as returned by params.declare_and_read)."""
         fsr = [values[f'fsr_{face}_channel'] for face in topics.FSR_FACES]
-        return cls(port=values['port'], robot_id=values['robot_id'], board=values['board'],
+        return cls(port=values['port'], robot_id=max(values['robot_id'], 0), board=values['board'],
                    baud=values['baud'], servo_channels=(values['arm1_channel'], values['arm2_channel']),
                    fsr_channels=(fsr[0], fsr[1], fsr[2], fsr[3]),
                    fsr_rate_hz=values['fsr_rate_hz'], watchdog_timeout=values['watchdog_timeout'],

@@ -23,7 +23,7 @@ from rclpy.node import Node
 
 from smarticle_common import topics
 from smarticle_driver.errors import DriverError
-from smarticle_common.node import DiagnosticsPublisher, read_config, run_node
+from smarticle_common.node import DiagnosticsPublisher, read_config, resolve_robot_id, run_node
 from smarticle_common.params import ParameterError
 from smarticle_driver.servo_bridge_core import NODE_NAME, PARAMS, BridgeConfig, ServoBridgeCore, StepResult
 
@@ -37,7 +37,8 @@ class ServoBridgeNode(Node):
 
     def __init__(self) -> None:
         super().__init__(NODE_NAME)
-        self.config = read_config(self, PARAMS, BridgeConfig.from_values)
+        self.config = read_config(self, PARAMS, lambda v: BridgeConfig.from_values(
+            {**v, 'robot_id': resolve_robot_id(self, v['robot_id'])}))
         self.core = ServoBridgeCore.from_config(self.config)
         self._warned: dict[str, tuple[float, int]] = {}
         self._warned_lock = threading.Lock()

@@ -14,7 +14,7 @@ import rclpy
 from rclpy.node import Node
 from rclpy.time import Time
 from smarticle_common import topics
-from smarticle_common.node import OK, WARN, DiagnosticsPublisher, read_config, run_node
+from smarticle_common.node import OK, WARN, DiagnosticsPublisher, read_config, resolve_robot_id, run_node
 from smarticle_common.params import ParameterError
 
 from .controller import ImpactController, check_sample
@@ -33,7 +33,7 @@ class FeedbackNode(Node):
     def __init__(self) -> None:
         super().__init__(NODE_NAME)
         config, values = read_config(self, PARAMS, lambda v: (config_from_values(v), v))
-        self.robot_id: int = values['robot_id']
+        self.robot_id = resolve_robot_id(self, values['robot_id'])
         self.controller = ImpactController(config)
         self.start_at: float = values['start_at']
         if self.start_at >= 0.0:

@@ -12,7 +12,7 @@ from typing import Any
 
 from smarticle_common import topics
 from smarticle_common.facts import GAIT_PERIOD
-from smarticle_common.params import ParameterError, ParamSpec
+from smarticle_common.params import ROBOT_ID_PARAM, ParameterError, ParamSpec
 
 from .controller import FeedbackConfig, ImpactWindow
 from .errors import FeedbackConfigError
@@ -36,7 +36,7 @@ def _face_params() -> tuple[ParamSpec, ...]:
 
 
 PARAMS: tuple[ParamSpec, ...] = (
-    ParamSpec('robot_id', 0, 'robot id k: topics live under /smarticle_<k>', 0, topics.MAX_ROBOT_ID),
+    ROBOT_ID_PARAM,
     *_face_params(),
     ParamSpec('debounce_samples', 1, 'consecutive FSR samples of one face inside its window that make an '
               'impact', 1, 1000),

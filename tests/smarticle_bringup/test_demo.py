@@ -28,6 +28,11 @@ def test_demo_runs_the_stack_and_writes_its_outputs(tmp_path: Path) -> None:
     assert '3 feedback nodes' in proc.stdout and 'feedback halts per robot: 0:' in proc.stdout   # on by default
     logs = sorted((out / 'logs').glob('feedback-*.log'))
     assert len(logs) == 3 and all('windows' in log.read_text() for log in logs)  # each node started
+    graph = (out / 'nodes.txt').read_text().split()              # the ROS graph during the run
+    assert 'every fully qualified name distinct' in proc.stdout and len(graph) == len(set(graph)), graph
+    for k in range(3):                                           # each robot's nodes in its namespace
+        assert f'/smarticle_{k}/gait' in graph and f'/smarticle_{k}/feedback' in graph, graph
+    assert {'/sim_bridge', '/glider_monitor'} <= set(graph), graph
     from smarticle_bags.arrays import read_poses
     from smarticle_bags.reader import BagReader
 

@@ -66,3 +66,20 @@ def test_invalid_parameter_stops_startup_with_a_clear_error() -> None:
                           capture_output=True, text=True, timeout=30)
     assert proc.returncode != 0
     assert 'alpha_max_deg' in proc.stdout + proc.stderr and 'maximum' in proc.stdout + proc.stderr
+
+
+def test_the_namespace_names_the_robot_and_a_disagreeing_robot_id_is_refused(nodes, ros_node) -> None:  # type: ignore[no-untyped-def]
+    """`-r __ns:=/smarticle_3` makes the node /smarticle_3/gait serving robot 3; robot_id 2 there is refused."""
+    from sensor_msgs.msg import JointState
+
+    node = ros_node('namespace_probe')
+    seen: list[str] = []
+    node.create_subscription(JointState, topics.topic('joint_commands', 3), lambda m: seen.append('3'),
+                             topics.qos_profile(topics.spec_of('joint_commands').qos))
+    nodes.start('gait', '--ros-args', '-r', '__ns:=/smarticle_3', '-p', 'autostart:=true')
+    assert spin_until(node, lambda: bool(seen), 20.0), 'no commands on /smarticle_3/joint_commands'
+    assert ('gait', '/smarticle_3') in node.get_node_names_and_namespaces()
+    proc = subprocess.run([executable('gait'), '--ros-args', '-r', '__ns:=/smarticle_3', '-p', 'robot_id:=2'],
+                          capture_output=True, text=True, timeout=30)
+    assert proc.returncode == 2
+    assert 'disagrees with its namespace /smarticle_3' in proc.stdout + proc.stderr
