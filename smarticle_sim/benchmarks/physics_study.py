@@ -1,0 +1,606 @@
+"""Physics study for issue #11: collision mechanism, time-step convergence, stability (docs/physics_study.md).
+
+Run from the repository root with the project's venv, ONE process at a time (the machine has 2 shared
+cores); every run is deterministic (seeded scenes, Bullet's deterministic pair ordering). Results are
+appended to ``out/physics/<experiment>.csv`` (one row per trial, written as soon as it ends) and figures
+go to ``out/physics/<experiment>.png``::
+
+    .venv/bin/python smarticle_sim/benchmarks/physics_study.py collide --model default --theta 150 --phi 180
+    .venv/bin/python smarticle_sim/benchmarks/physics_study.py mechanism --periods 20
+    .venv/bin/python smarticle_sim/benchmarks/physics_study.py drift --model authors --dt 240 480 960 1920
+    .venv/bin/python smarticle_sim/benchmarks/physics_study.py pair --model authors --dt 240 480 960
+    .venv/bin/python smarticle_sim/benchmarks/physics_study.py basin --model authors --periods 75
+    .venv/bin/python smarticle_sim/benchmarks/physics_study.py dense --model authors --seeds 0-9 --periods 300
+
+A *model* is a named set of settings (``MODELS``): PhysicsConfig / RobotSpec field overrides, plus the
+gait's servo speed. ``--set name=value`` changes one field on top of the model. Extra Bullet knobs that
+are not settings fields yet are applied after ``World._build`` by ``apply_extras`` (names starting with
+``x_``: ``x_split_impulse``, ``x_split_threshold``, ``x_rvt`` restitution velocity threshold,
+``x_ccd`` swept-sphere radius in m, ``x_plate_restitution``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+import sys
+import time
+from dataclasses import fields, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pybullet
+from smarticle_driver.gait import GaitConfig
+
+from smarticle_sim.errors import SceneError, SimTrouble
+from smarticle_sim.geometry import pair_coordinates
+from smarticle_sim.scenes import RobotPlacement, Scene, dense_scene, pair_scene
+from smarticle_sim.settings import PhysicsConfig, RobotSpec, SimConfig
+from smarticle_sim.world import ARM_JOINTS, World
+
+OUT = Path('out/physics')
+BL = 0.054
+CHRONO_SPEED = math.pi / 0.4   # rad/s: the authors' motors turn pi rad per 0.4 s quarter
+
+#: Named settings. 'default' = the shipped defaults. 'authors' = the authors' Chrono model as far as
+#: PyBullet can take it: friction 0.3 on every pair (body-plate 0.3), restitution 0.85 between robots,
+#: rigid speed-driven motors (position gain 1: the arm reaches its target in one step at full speed,
+#: torque limit far above any contact load), Chrono speed pi rad / 0.4 s, 24.8 g body (arms 5 g each).
+MODELS: dict[str, dict[str, Any]] = {
+    'default': {},
+    'rigid': {'position_gain': 1.0, 'servo_torque': 10.0},
+    'authors': {'friction_arm_arm': None, 'friction_robot_robot': 0.3, 'friction_body_plate': 0.3,
+                'restitution': 0.85, 'restitution_body_plate': 0.0, 'restitution_velocity_threshold': 0.01,
+                'position_gain': 1.0, 'servo_torque': 10.0, 'arm_mass': 0.005, 'gait_speed': CHRONO_SPEED},
+}
+#: The candidate: the authors' model with a servo of fixed bandwidth 72 /s (the shipped servo's final
+#: approach at 1/240 s, now the same at every step), which sets P7's drift (docs/physics_study.md).
+MODELS['candidate'] = {**MODELS['authors'], 'servo_bandwidth': 72.0}
+
+
+def parse_value(text: str) -> Any:
+    """'none' -> None, 'true'/'false' -> bool, 'a/b' -> a/b, ints stay int, else float."""
+    low = text.lower()
+    if low == 'none':
+        return None
+    if low in ('true', 'false'):
+        return low == 'true'
+    if '/' in text:
+        a, b = text.split('/')
+        return float(a) / float(b)
+    try:
+        return int(text)
+    except ValueError:
+        return float(text)
+
+
+def model_settings(name: str, sets: list[str] | None = None) -> dict[str, Any]:
+    """The model's settings with ``name=value`` overrides."""
+    out = dict(MODELS[name])
+    for item in sets or []:
+        key, _, value = item.partition('=')
+        out[key] = parse_value(value)
+    return out
+
+
+def make_config(settings: dict[str, Any]) -> tuple[SimConfig, float, dict[str, Any]]:
+    """(SimConfig, gait servo speed, extras) from a settings dict."""
+    physics_names = {f.name for f in fields(PhysicsConfig)}
+    robot_names = {f.name for f in fields(RobotSpec)}
+    physics = {k: v for k, v in settings.items() if k in physics_names}
+    robot = {k: v for k, v in settings.items() if k in robot_names}
+    extras = {k: v for k, v in settings.items() if k.startswith('x_')}
+    unknown = set(settings) - physics_names - robot_names - set(extras) - {'gait_speed'}
+    if unknown:
+        raise SystemExit(f'unknown setting(s) {sorted(unknown)}')
+    if 'time_step' in physics:
+        dt = physics['time_step']
+        physics['time_step'] = dt = 1.0 / round(1.0 / dt)
+        if 'control_tick' not in physics:   # a tick must be a whole number of steps: 1/60 s or one step
+            physics['control_tick'] = 1.0 / 60.0 if round(1.0 / dt) % 60 == 0 else dt
+    base = SimConfig()
+    robot_spec = replace(base.robot, **robot)
+    gait_speed = float(settings.get('gait_speed', robot_spec.servo_speed))
+    if gait_speed > robot_spec.servo_speed:
+        robot_spec = replace(robot_spec, servo_speed=gait_speed)
+    return SimConfig(robot_spec, replace(base.physics, **physics)), gait_speed, extras
+
+
+def apply_extras(world: World, extras: dict[str, Any]) -> None:
+    """Bullet knobs that are not settings fields (yet), applied after the world is built."""
+    c = world.client
+    params: dict[str, Any] = {}
+    if 'x_split_impulse' in extras:
+        params['useSplitImpulse'] = int(bool(extras['x_split_impulse']))
+    if 'x_split_threshold' in extras:
+        params['splitImpulsePenetrationThreshold'] = float(extras['x_split_threshold'])
+    if 'x_rvt' in extras:
+        params['restitutionVelocityThreshold'] = float(extras['x_rvt'])
+    if 'x_cfm' in extras:
+        params['globalCFM'] = float(extras['x_cfm'])
+    if 'x_friction_erp' in extras:
+        params['frictionERP'] = float(extras['x_friction_erp'])
+    if params:
+        c.setPhysicsEngineParameter(**params)
+    if 'x_plate_restitution' in extras:
+        c.changeDynamics(world.plate_id, -1, restitution=float(extras['x_plate_restitution']))
+    if extras.get('x_ccd'):
+        for body in world.body_ids:
+            for link in (-1, *ARM_JOINTS):
+                c.changeDynamics(body, link, ccdSweptSphereRadius=float(extras['x_ccd']))
+
+
+def make_world(settings: dict[str, Any], scene: Scene) -> World:
+    """A World for ``scene`` with the settings and extras applied."""
+    config, _, extras = make_config(settings)
+    world = World(config, scene)
+    apply_extras(world, extras)
+    return world
+
+
+def gait_for(settings: dict[str, Any], alpha_deg: float = 90.0, phase: float = 0.0) -> GaitConfig:
+    """The square gait of a model."""
+    config, speed, _ = make_config(settings)
+    return GaitConfig.from_degrees(alpha_deg, servo_speed=speed, phase=phase)
+
+
+def append_csv(name: str, row: dict[str, Any]) -> None:
+    """Append one row to out/physics/<name>.csv (header from the first row's keys)."""
+    OUT.mkdir(parents=True, exist_ok=True)
+    path = OUT / f'{name}.csv'
+    new = not path.exists()
+    with path.open('a', newline='') as fh:
+        writer = csv.DictWriter(fh, fieldnames=list(row), extrasaction='ignore')
+        if new:
+            writer.writeheader()
+        writer.writerow(row)
+
+
+def read_csv(name: str) -> list[dict[str, str]]:
+    """Rows of out/physics/<name>.csv."""
+    path = OUT / f'{name}.csv'
+    if not path.exists():
+        return []
+    with path.open() as fh:
+        return list(csv.DictReader(fh))
+
+
+def wilson(k: int, n: int, z: float = 1.96) -> tuple[float, float]:
+    """95 % Wilson score interval of a proportion k / n."""
+    if n == 0:
+        return (0.0, 1.0)
+    p = k / n
+    den = 1 + z * z / n
+    centre = (p + z * z / (2 * n)) / den
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / den
+    return (max(0.0, centre - half), min(1.0, centre + half))
+
+
+# ------------------------------------------------------------------ collision instrumentation
+
+
+def _link_kind(link: int) -> str:
+    return 'body' if link == -1 else 'arm'
+
+
+def collide(settings: dict[str, Any], theta: float, phi: float, phases: tuple[float, float] = (0.0, 0.0),
+            periods: float = 10.0, r: float = 1.3, alpha: float = 90.0) -> dict[str, Any]:
+    """Run a pair step by step and measure every collision's impulses and the motion they cause.
+
+    Per physics step: robot-robot contact forces (normal and friction, as impulses force x dt) resolved
+    along the unit vector u from robot 1's centre to robot 2's (positive = pushes the pair apart), and
+    the body-plate friction impulse on each body along the same axis (sign as for that robot: positive
+    = moving it away from the other). A collision is a run of steps with a robot-robot contact (gaps of
+    up to 3 steps merged). Per collision: its duration, the separating impulses, dr during the contact,
+    dr in the contact-free time that follows (coasting), the largest body speed after it.
+    """
+    config, _, extras = make_config(settings)
+    gait = gait_for(settings, alpha)
+    scene = pair_scene(config.robot, gait, r, math.radians(theta), math.radians(phi), phases)
+    world = make_world(settings, scene)
+    c = world.client
+    b1, b2 = world.body_ids
+    plate = world.plate_id
+    dt = config.physics.time_step
+    n_steps = round(periods * gait.period / dt)
+    world.start_gaits(0.0)
+    rows = []
+    trouble = ''
+    try:
+        for i in range(n_steps):
+            world._update_gaits()
+            world.step(1)
+            if (i + 1) % world.steps_per_tick == 0:
+                world._tick_count += 1
+                if world._tick_count % config.physics.trouble_every == 0:
+                    world.check_trouble()
+            p1 = np.array(c.getBasePositionAndOrientation(b1)[0])
+            p2 = np.array(c.getBasePositionAndOrientation(b2)[0])
+            d = p2[:2] - p1[:2]
+            dist = float(np.hypot(*d))
+            u = np.array([d[0] / dist, d[1] / dist, 0.0])
+            normal = friction = 0.0
+            kinds = set()
+            depth = 0.0
+            for pt in c.getContactPoints(bodyA=b1, bodyB=b2):
+                n_on_b = np.array(pt[7])           # points from B (robot 2) toward A (robot 1)
+                f_a = pt[9] * n_on_b + pt[10] * np.array(pt[11]) + pt[12] * np.array(pt[13])
+                # the impulse on robot 2 is -f_a; along u (+ = apart); robot 1 gets f_a along -u (+ = apart)
+                normal += 2.0 * float(np.dot(-pt[9] * n_on_b, u)) * dt   # both robots' share
+                friction += 2.0 * float(np.dot(-(f_a - pt[9] * n_on_b), u)) * dt
+                kinds.add(f'{_link_kind(pt[3])}{pt[3] if pt[3] >= 0 else ""}-{_link_kind(pt[4])}'
+                          f'{pt[4] if pt[4] >= 0 else ""}')
+                depth = max(depth, -pt[8])
+            plate_imp = 0.0
+            for body, sign in ((b1, -1.0), (b2, 1.0)):
+                for pt in c.getContactPoints(bodyA=body, bodyB=plate):
+                    f = pt[10] * np.array(pt[11]) + pt[12] * np.array(pt[13])   # friction on A = the robot
+                    plate_imp += sign * float(np.dot(f, u)) * dt
+            v1 = np.array(c.getBaseVelocity(b1)[0])
+            v2 = np.array(c.getBaseVelocity(b2)[0])
+            rows.append((world.time, dist, normal, friction, plate_imp, bool(kinds), '+'.join(sorted(kinds)),
+                         float(np.hypot(*v1[:2])), float(np.hypot(*v2[:2])), float(np.dot(v2 - v1, u)), depth))
+    except SimTrouble as exc:
+        trouble = str(exc)[:80]
+    finally:
+        world.close()
+    return {'rows': rows, 'trouble': trouble, 'dt': dt, 'period': gait.period}
+
+
+def collisions(trace: dict[str, Any], merge: int = 3) -> list[dict[str, Any]]:
+    """Group a ``collide`` trace into collision events (see ``collide``)."""
+    rows = trace['rows']
+    events: list[dict[str, Any]] = []
+    i, n = 0, len(rows)
+    while i < n:
+        if not rows[i][5]:
+            i += 1
+            continue
+        j, gap = i, 0
+        k = i
+        while k < n and gap <= merge:
+            if rows[k][5]:
+                j, gap = k, 0
+            else:
+                gap += 1
+            k += 1
+        seg = rows[i:j + 1]
+        events.append({'start': i, 'end': j, 't0': rows[i][0], 'dur_ms': (j - i + 1) * trace['dt'] * 1e3,
+                       'J_normal': sum(s[2] for s in seg), 'J_friction': sum(s[3] for s in seg),
+                       'J_plate': sum(s[4] for s in seg),
+                       'dr_contact_mm': (rows[j][1] - rows[max(i - 1, 0)][1]) * 1e3,
+                       'kinds': '+'.join(sorted({kk for s in seg for kk in s[6].split('+') if kk})),
+                       'vsep_end': rows[j][9], 'depth_mm': max(s[10] for s in seg) * 1e3})
+        i = j + 1
+    for e, nxt in zip(events, events[1:] + [None]):
+        stop = nxt['start'] if nxt else n
+        e['dr_after_mm'] = (rows[stop - 1][1] - rows[e['end']][1]) * 1e3
+        e['J_plate_after'] = sum(s[4] for s in rows[e['end'] + 1:stop])
+        speeds = [max(s[7], s[8]) for s in rows[e['end'] + 1:stop]] or [0.0]
+        e['vmax_after'] = max(speeds)
+        e['coast_ms'] = trace['dt'] * 1e3 * next((q for q, s in enumerate(rows[e['end'] + 1:stop])
+                                                  if max(s[7], s[8]) < 1e-3), len(speeds))
+    return events
+
+
+def exp_collide(args: argparse.Namespace) -> None:
+    settings = model_settings(args.model, args.set)
+    trace = collide(settings, args.theta, args.phi, (0.0, args.phase2), args.periods, args.r)
+    ev = collisions(trace)
+    print(f'model {args.model} {args.set or ""}: theta {args.theta} phi {args.phi} p2 {args.phase2}; '
+          f'{len(ev)} collisions; r {trace["rows"][0][1] / BL:.3f} -> {trace["rows"][-1][1] / BL:.3f} BL '
+          f'{trace["trouble"]}')
+    cols = ['t0', 'dur_ms', 'kinds', 'J_normal', 'J_friction', 'J_plate', 'dr_contact_mm', 'vsep_end',
+            'dr_after_mm', 'J_plate_after', 'vmax_after', 'coast_ms', 'depth_mm']
+    print(' | '.join(cols))
+    for e in ev[:args.show]:
+        print(' | '.join(f'{e[c]:.4g}' if isinstance(e[c], float) else str(e[c]) for c in cols))
+
+
+# ------------------------------------------------------------------ mechanism table
+
+#: P4-style starts for the mechanism table: theta in quadrants 2 and 3 and parallel normals (the paper's
+#: repulsive region), plus quadrant 1 / 4 antiparallel (its attractive region), r = 1.3 BL, phases 0 / 0.25.
+MECH_STARTS = [(th, ph) for th in (120, 150, 210, 240) for ph in (0, 180)] + \
+    [(th, ph) for th in (30, 60, 300, 330) for ph in (0, 180)]
+
+VARIANTS: dict[str, dict[str, Any]] = {
+    'default': {},
+    'rigid motor': {'position_gain': 1.0, 'servo_torque': 10.0},
+    'chrono speed': {'gait_speed': CHRONO_SPEED},
+    'restitution 0.85 (robots, rvt 0.01)': {'restitution': 0.85, 'x_plate_restitution': 0.0, 'x_rvt': 0.01},
+    'arm-arm friction 0.3': {'friction_arm_arm': None},
+    'body 24.8 g': {'arm_mass': 0.005},
+    'split impulse': {'x_split_impulse': 1, 'x_split_threshold': -0.0001},
+    'contact ERP 0.2': {'contact_erp': 0.2},
+    'dt 1/960': {'time_step': 1 / 960},
+    'authors': MODELS['authors'],
+}
+
+
+def summarise_trace(trace: dict[str, Any], period: float) -> dict[str, Any]:
+    """Per-trace figures: collisions, separating impulses, dr in contact vs coasting, final r, contact late."""
+    ev = collisions(trace)
+    rows = trace['rows']
+    n_per = round(period / trace['dt'])
+    last = rows[-10 * n_per:]
+    return {'collisions': len(ev), 'r0': rows[0][1] / BL, 'r_end': rows[-1][1] / BL,
+            'J_normal': sum(e['J_normal'] for e in ev), 'J_friction': sum(e['J_friction'] for e in ev),
+            'J_plate': sum(s[4] for s in rows),
+            'dr_contact_BL': sum(e['dr_contact_mm'] for e in ev) * 1e-3 / BL,
+            'dr_coast_BL': sum(e['dr_after_mm'] for e in ev) * 1e-3 / BL,
+            'vsep_max': max((e['vsep_end'] for e in ev), default=0.0),
+            'coast_ms_med': float(np.median([e['coast_ms'] for e in ev])) if ev else 0.0,
+            'touch_last10': any(s[5] for s in last), 'depth_max_mm': max((s[10] for s in rows), default=0) * 1e3,
+            'trouble': trace['trouble']}
+
+
+def exp_mechanism(args: argparse.Namespace) -> None:
+    names = args.variants or list(VARIANTS)
+    for name in names:
+        settings = dict(VARIANTS[name])
+        for phase2 in args.phase2:
+            for theta, phi in MECH_STARTS:
+                t0 = time.perf_counter()
+                try:
+                    trace = collide(settings, theta, phi, (phase2, phase2), args.periods)   # paper: same phase p
+                except SceneError:
+                    continue
+                row = {'variant': name, 'theta': theta, 'phi': phi, 'phase': phase2, 'periods': args.periods,
+                       **summarise_trace(trace, trace['period']), 'wall_s': time.perf_counter() - t0}
+                append_csv('mechanism', row)
+                print(' '.join(f'{k}={v:.3g}' if isinstance(v, float) else f'{k}={v}' for k, v in row.items()),
+                      flush=True)
+
+
+# ------------------------------------------------------------------ drift, pair, basin, dense
+
+
+def drift_run(settings: dict[str, Any], heading_deg: float, periods: int = 20, skip: int = 2,
+              alpha: float = 90.0) -> dict[str, Any]:
+    """One robot alone: net drift per cycle (um) over ``periods`` after ``skip`` transient periods."""
+    config, _, _ = make_config(settings)
+    gait = gait_for(settings, alpha)
+    a = gait.alpha_max
+    scene = Scene((RobotPlacement(0.0, 0.0, math.radians(heading_deg), a, a, gait),), name='single')
+    world = make_world(settings, scene)
+    per = world.ticks_for(gait.period)
+    world.start_gaits(0.0)
+    xy = []
+    t0 = time.perf_counter()
+    trouble = ''
+    try:
+        for q in range(periods + skip + 1):
+            if q >= skip:
+                xy.append(world.poses()[0, :2].copy())
+            if q < periods + skip:
+                world.run(per)
+    except SimTrouble as exc:
+        trouble = str(exc)[:80]
+    wall = time.perf_counter() - t0
+    world.close()
+    xy_a = np.array(xy)
+    steps = np.linalg.norm(np.diff(xy_a, axis=0), axis=1)
+    return {'heading': heading_deg, 'alpha': alpha, 'periods': periods,
+            'net_um': float(np.linalg.norm(xy_a[-1] - xy_a[0]) / (len(xy_a) - 1) * 1e6),
+            'step_um': float(steps.mean() * 1e6), 'step_se_um': float(steps.std(ddof=1) / math.sqrt(len(steps)) * 1e6),
+            'dir_deg': float(math.degrees(math.atan2(*(xy_a[-1] - xy_a[0])[::-1]))),
+            'wall_per_sim_s': wall / ((periods + skip) * gait.period), 'trouble': trouble}
+
+
+def pair_run(settings: dict[str, Any], theta: float, phi: float, phases: tuple[float, float],
+             periods: int = 100, r: float = 1.3) -> dict[str, Any]:
+    """A pair from pair coordinates: per-period contact, r, COM; bound-run figures (contact-based)."""
+    config, _, _ = make_config(settings)
+    gait = gait_for(settings)
+    scene = pair_scene(config.robot, gait, r, math.radians(theta), math.radians(phi), phases)
+    world = make_world(settings, scene)
+    per = world.ticks_for(gait.period)
+    world.start_gaits(0.0)
+    touched, rs, phis, com = [], [], [], []
+    t0 = time.perf_counter()
+    trouble = ''
+    try:
+        for q in range(periods):
+            poses = world.poses()
+            pc = pair_coordinates(poses[0], poses[1], BL)
+            com.append(poses[:, :2].mean(axis=0))
+            t_any = False
+            for _ in range(per):
+                world.tick()
+                if not t_any and world.robot_contacts()[0, 1]:
+                    t_any = True
+            touched.append(t_any)
+            rs.append(pc.r)
+            phis.append(math.degrees(pc.phi))
+        poses = world.poses()
+        com.append(poses[:, :2].mean(axis=0))
+    except SimTrouble as exc:
+        trouble = str(exc)[:80]
+    wall = time.perf_counter() - t0
+    world.close()
+    tt = np.array(touched, dtype=bool)
+    n = len(tt)
+    # longest run of touching periods (gaps of one period allowed: a missed sample is not an unbinding)
+    best, best_start, cur, start, miss = 0, 0, 0, 0, 0
+    for q in range(n):
+        if tt[q]:
+            if cur == 0:
+                start = q
+            cur, miss = q - start + 1, 0
+        else:
+            miss += 1
+            if miss > 1:
+                cur = 0
+        if cur > best:
+            best, best_start = cur, start
+    com_a = np.array(com)
+    late = com_a[n // 2:]
+    rs_a = np.array(rs)
+    half = rs_a[n // 2:] if n else rs_a
+    phis_a = np.radians(np.array(phis[n // 2:]))
+    return {'theta0': theta, 'phi0': phi, 'p1': phases[0], 'p2': phases[1], 'periods': periods, 'ran': n,
+            'touch': int(tt.sum()), 'bound_run': best, 'bound_to_end': bool(n and best_start + best >= n - 1),
+            'touch_last10': bool(tt[-10:].any()) if n else False,
+            'r_end': rs_a[-1] if n else math.nan, 'r_mean_late': float(half.mean()) if n else math.nan,
+            'phi_late': float(math.degrees(math.atan2(np.sin(phis_a).mean(), np.cos(phis_a).mean())) % 360)
+            if n else math.nan,
+            'travel_W': float(np.linalg.norm(com_a[-1] - com_a[0]) / BL),
+            'late_travel_W': float(np.linalg.norm(late[-1] - late[0]) / BL) if len(late) > 1 else 0.0,
+            'wall_per_sim_s': wall / max(1e-9, n * gait.period), 'trouble': trouble}
+
+
+def dense_run(settings: dict[str, Any], seed: int, periods: int, n: int = 7, jitter: float = 0.0,
+              sample_every: int = 6) -> dict[str, Any]:
+    """A dense scene run through the batch loop's metrics: trouble, max depth, gliders (contacts + 1.6 BL)."""
+    from smarticle_tracking.gliders import GliderClass, GliderConfig, analyse_gliders
+    config, _, _ = make_config(settings)
+    gait = gait_for(settings)
+    scene = dense_scene(config.robot, gait, n=n, seed=seed, phase_jitter=jitter)
+    world = make_world(settings, scene)
+    per = world.ticks_for(gait.period)
+    ticks = per * periods
+    times, poses, contacts = [], [], []
+    deepest = 0.0
+    world.start_gaits(0.0)
+    t0 = time.perf_counter()
+    trouble = ''
+    iu = np.triu_indices(n, 1)
+    try:
+        for i in range(ticks):
+            world.tick()
+            if i % sample_every == 0:
+                times.append(world.time)
+                poses.append(world.poses().copy())
+                contacts.append(world.robot_contacts()[iu])
+                deepest = max(deepest, world.max_penetration()[1])
+    except SimTrouble as exc:
+        trouble = str(exc)[:100]
+    wall = time.perf_counter() - t0
+    world.close()
+    row: dict[str, Any] = {'seed': seed, 'n': n, 'jitter': jitter, 'periods': periods,
+                           'sim_s': times[-1] if times else 0.0, 'wall_s': wall,
+                           'x_real_time': (times[-1] if times else 0.0) / wall, 'deepest_mm': deepest * 1e3,
+                           'trouble': trouble}
+    if n == 7 and len(times) > per:
+        cfg = GliderConfig(period=gait.period, r_bind=1.6 * BL, min_periods=30, body_length=BL, width=BL)
+        pos = np.array(poses)
+        an = analyse_gliders(np.array(times), pos, cfg, contacts=np.array(contacts))
+        gl = an.gliders
+        # isolated: bound >= 100 periods with no third robot within 2 W of either member at the run's end
+        iso = 0
+        best_dist = 0.0
+        for g in gl:
+            if g.lifetime_periods < 100:
+                continue
+            i, j = g.pair if hasattr(g, 'pair') else (g.i, g.j)
+            others = [k for k in range(n) if k not in (i, j)]
+            d = np.linalg.norm(pos[-1, others, None, :2] - pos[-1, None, [i, j], :2], axis=2).min()
+            if d > 2 * BL:
+                iso += 1
+            best_dist = max(best_dist, g.distance / BL)
+        row.update(gliders_30=len(gl), gliders_100=sum(g.lifetime_periods >= 100 for g in gl), isolated_100=iso,
+                   best_dist_W=best_dist,
+                   c1_lives=' '.join(str(g.lifetime_periods) for g in gl if g.glider_class is GliderClass.C1),
+                   c2_lives=' '.join(str(g.lifetime_periods) for g in gl if g.glider_class is GliderClass.C2))
+    return row
+
+
+def seeds_arg(text: str) -> list[int]:
+    if '-' in text:
+        a, b = text.split('-')
+        return list(range(int(a), int(b) + 1))
+    return [int(x) for x in text.split(',')]
+
+
+def exp_drift(args: argparse.Namespace) -> None:
+    for dtinv in args.dt:
+        settings = model_settings(args.model, (args.set or []) + [f'time_step=1/{dtinv}'])
+        for h in args.headings:
+            row = {'model': args.model, 'set': ';'.join(args.set or []), 'dt_inv': dtinv,
+                   **drift_run(settings, h, args.periods)}
+            append_csv(args.name or 'drift', row)
+            print(row, flush=True)
+
+
+def exp_pair(args: argparse.Namespace) -> None:
+    for dtinv in args.dt:
+        settings = model_settings(args.model, (args.set or []) + [f'time_step=1/{dtinv}'])
+        for theta, phi in args.starts:
+            for p2 in args.phase2:
+                try:
+                    row = {'model': args.model, 'set': ';'.join(args.set or []), 'dt_inv': dtinv,
+                           **pair_run(settings, theta, phi, (0.0, p2), args.periods)}
+                except SceneError:
+                    continue
+                append_csv(args.name or 'pair', row)
+                print(row, flush=True)
+
+
+def exp_basin(args: argparse.Namespace) -> None:
+    settings = model_settings(args.model, (args.set or []) + ([f'time_step=1/{args.dt}'] if args.dt else []))
+    for p in args.phase:
+        for theta in np.arange(0, 360, args.step):
+            for phi in np.arange(0, 360, args.step):
+                try:
+                    row = {'model': args.model, 'set': ';'.join(args.set or []), 'dt_inv': args.dt or 240,
+                           'phase': p, **pair_run(settings, float(theta), float(phi), (p, p), args.periods)}
+                except SceneError:
+                    continue
+                append_csv(args.name or 'basin', row)
+                print(row, flush=True)
+
+
+def exp_dense(args: argparse.Namespace) -> None:
+    settings = model_settings(args.model, args.set)
+    for seed in seeds_arg(args.seeds):
+        row = {'model': args.model, 'set': ';'.join(args.set or []), **dense_run(settings, seed, args.periods, args.n,
+                                                                           args.jitter)}
+        append_csv(args.name or 'dense', row)
+        print(row, flush=True)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest='experiment', required=True)
+    p = sub.add_parser('collide')
+    p.add_argument('--model', default='default', choices=list(MODELS))
+    p.add_argument('--set', action='append')
+    p.add_argument('--theta', type=float, default=150.0)
+    p.add_argument('--phi', type=float, default=180.0)
+    p.add_argument('--phase2', type=float, default=0.0)
+    p.add_argument('--r', type=float, default=1.3)
+    p.add_argument('--periods', type=float, default=5.0)
+    p.add_argument('--show', type=int, default=30)
+    p = sub.add_parser('mechanism')
+    p.add_argument('--variants', nargs='*')
+    p.add_argument('--phase2', type=float, nargs='*', default=[0.0])
+    p.add_argument('--periods', type=float, default=20.0)
+    for name in ('drift', 'pair', 'basin', 'dense'):
+        p = sub.add_parser(name)
+        p.add_argument('--model', default='default', choices=list(MODELS))
+        p.add_argument('--set', action='append')
+        p.add_argument('--name', default=None, help='CSV name (default: the experiment)')
+        p.add_argument('--periods', type=int, default={'drift': 20, 'pair': 100, 'basin': 75, 'dense': 300}[name])
+    sub.choices['drift'].add_argument('--dt', type=int, nargs='*', default=[240])
+    sub.choices['drift'].add_argument('--headings', type=float, nargs='*', default=[90.0])
+    sub.choices['pair'].add_argument('--dt', type=int, nargs='*', default=[240])
+    sub.choices['pair'].add_argument('--starts', type=lambda t: tuple(float(x) for x in t.split(',')), nargs='*',
+                                     default=[(330.0, 180.0)])
+    sub.choices['pair'].add_argument('--phase2', type=float, nargs='*', default=[0.05])
+    sub.choices['basin'].add_argument('--dt', type=int, default=0)
+    sub.choices['basin'].add_argument('--step', type=float, default=30.0)
+    sub.choices['basin'].add_argument('--phase', type=float, nargs='*', default=[0.0, 0.25])
+    sub.choices['dense'].add_argument('--seeds', default='0-9')
+    sub.choices['dense'].add_argument('--n', type=int, default=7)
+    sub.choices['dense'].add_argument('--jitter', type=float, default=0.0)
+    args = parser.parse_args()
+    {'collide': exp_collide, 'mechanism': exp_mechanism, 'drift': exp_drift, 'pair': exp_pair,
+     'basin': exp_basin, 'dense': exp_dense}[args.experiment](args)
+
+
+if __name__ == '__main__':
+    sys.exit(main())
