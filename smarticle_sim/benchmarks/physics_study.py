@@ -121,6 +121,8 @@ def apply_extras(world: World, extras: dict[str, Any]) -> None:
         params['restitutionVelocityThreshold'] = float(extras['x_rvt'])
     if 'x_cfm' in extras:
         params['globalCFM'] = float(extras['x_cfm'])
+    if 'x_cone' in extras:
+        params['enableConeFriction'] = int(bool(extras['x_cone']))
     if 'x_friction_erp' in extras:
         params['frictionERP'] = float(extras['x_friction_erp'])
     if params:
@@ -318,7 +320,13 @@ VARIANTS: dict[str, dict[str, Any]] = {
     'contact ERP 0.2': {'contact_erp': 0.2},
     'dt 1/960': {'time_step': 1 / 960},
     'authors': MODELS['authors'],
+    'restitution 0.85 (robots, Bullet rvt 0.2)': {'restitution': 0.85, 'restitution_body_plate': 0.0},
+    'candidate': {**MODELS['authors'], 'servo_bandwidth': 72.0},
+    'authors + arm-arm friction 1.5': {**MODELS['authors'], 'friction_arm_arm': 1.5},
 }
+for _inv in (480, 960, 1920):   # the candidate's binding outcome against the time step
+    VARIANTS[f'candidate dt 1/{_inv}'] = {**MODELS['candidate'], 'time_step': 1.0 / _inv}
+    VARIANTS[f'default dt 1/{_inv}'] = {'time_step': 1.0 / _inv}
 
 
 def summarise_trace(trace: dict[str, Any], period: float) -> dict[str, Any]:
@@ -490,16 +498,21 @@ def dense_run(settings: dict[str, Any], seed: int, periods: int, n: int = 7, jit
         pos = np.array(poses)
         an = analyse_gliders(np.array(times), pos, cfg, contacts=np.array(contacts))
         gl = an.gliders
-        # isolated: bound >= 100 periods with no third robot within 2 W of either member at the run's end
+        # isolated: bound >= 100 periods and, in >= 90 % of the frames of its bound run, no third robot's
+        # centre within 2 W of either member's centre (the issue's "no third robot near")
         iso = 0
         best_dist = 0.0
+        t_arr = np.array(times)
         for g in gl:
             if g.lifetime_periods < 100:
                 continue
-            i, j = g.pair if hasattr(g, 'pair') else (g.i, g.j)
+            i, j = g.i, g.j
             others = [k for k in range(n) if k not in (i, j)]
-            d = np.linalg.norm(pos[-1, others, None, :2] - pos[-1, None, [i, j], :2], axis=2).min()
-            if d > 2 * BL:
+            sel = (t_arr >= g.start_time) & (t_arr < g.end_time)
+            a = pos[sel][:, others, None, :2]
+            b = pos[sel][:, None, [i, j], :2]
+            near = (np.linalg.norm(a - b, axis=3) < 2 * BL).any(axis=(1, 2))
+            if sel.any() and near.mean() <= 0.1:
                 iso += 1
             best_dist = max(best_dist, g.distance / BL)
         row.update(gliders_30=len(gl), gliders_100=sum(g.lifetime_periods >= 100 for g in gl), isolated_100=iso,
@@ -563,6 +576,188 @@ def exp_dense(args: argparse.Namespace) -> None:
         print(row, flush=True)
 
 
+# ------------------------------------------------------------------ figures
+
+
+def _plt() -> Any:
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    return plt
+
+
+def fig_trace(theta: float = 330.0, phi: float = 180.0, periods: float = 3.0) -> Path:
+    """r(t) and cumulative separating impulses of one pair start under three models."""
+    plt = _plt()
+    fig, axes = plt.subplots(2, 3, figsize=(13, 6), sharex=True)
+    for col, name in enumerate(('default', 'authors', 'candidate')):
+        tr = collide(MODELS[name], theta, phi, (0.0, 0.0), periods)
+        rows = np.array([(s[0], s[1], s[2], s[3], s[4]) for s in tr['rows']])
+        ax = axes[0, col]
+        ax.plot(rows[:, 0], rows[:, 1] / BL, 'k-')
+        touch = np.array([s[5] for s in tr['rows']])
+        ax.fill_between(rows[:, 0], rows[:, 1].min() / BL, rows[:, 1].max() / BL, where=touch, color='orange',
+                        alpha=0.3, label='robot-robot contact')
+        ax.set_title(f'{name}: theta {theta:g}, phi {phi:g}, phases 0/0')
+        ax.set_ylabel('r (BL)')
+        ax.legend(fontsize=7)
+        ax = axes[1, col]
+        for k, lab in ((2, 'robot-robot normal'), (3, 'robot-robot friction'), (4, 'body-plate friction')):
+            ax.plot(rows[:, 0], np.cumsum(rows[:, k]) * 1e3, label=lab)
+        ax.set_ylabel('cumulative separating impulse (mN s)')
+        ax.set_xlabel('t (s)')
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    path = OUT / 'collision_trace.png'
+    fig.savefig(path, dpi=110)
+    return path
+
+
+def fig_drift() -> Path:
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    groups: dict[tuple[str, str, str], list[tuple[float, float]]] = {}
+    for name in ('drift', 'drift_bw'):
+        for r in read_csv(name):
+            groups.setdefault((r['model'], r['set'], r['heading']), []).append((float(r['dt_inv']), float(r['net_um'])))
+    cmap = plt.get_cmap('tab20')
+    for idx, ((model, st, head), pts) in enumerate(sorted(groups.items())):
+        pts.sort()
+        x, y = zip(*pts)
+        ax.plot([1 / v for v in x], y, 'os^vD<>'[idx % 7] + '-', color=cmap(idx % 20),
+                label=f'{model} {st} heading {float(head):g}')
+    ax.axhline(75, color='k', ls='--', lw=0.8, label='paper 75 um')
+    ax.set_xscale('log')
+    ax.set_yscale('log')
+    ax.set_xlabel('time step (s)')
+    ax.set_ylabel('drift per cycle (um)')
+    ax.legend(fontsize=6)
+    fig.tight_layout()
+    path = OUT / 'drift_vs_dt.png'
+    fig.savefig(path, dpi=110)
+    return path
+
+
+def fig_mechanism() -> Path:
+    plt = _plt()
+    rows = read_csv('mechanism')
+    names = list(dict.fromkeys(r['variant'] for r in rows))
+    fig, axes = plt.subplots(1, 2, figsize=(13, 4.5))
+    frac, lo, hi, jn, jf, jp = [], [], [], [], [], []
+    for v in names:
+        rs = [r for r in rows if r['variant'] == v]
+        k = sum(r['touch_last10'] == 'True' for r in rs)
+        a, b = wilson(k, len(rs))
+        frac.append(k / len(rs))
+        lo.append(k / len(rs) - a)
+        hi.append(b - k / len(rs))
+        jn.append(np.mean([float(r['J_normal']) for r in rs]) * 1e3)
+        jf.append(np.mean([float(r['J_friction']) for r in rs]) * 1e3)
+        jp.append(np.mean([float(r['J_plate']) for r in rs]) * 1e3)
+    y = np.arange(len(names))
+    axes[0].barh(y, frac, xerr=[lo, hi], color='tab:blue')
+    axes[0].set_yticks(y, names, fontsize=7)
+    axes[0].set_xlabel('fraction of starts still touching in the last 10 of 20 periods (95 % Wilson)')
+    axes[1].barh(y - 0.25, jn, 0.25, label='robot-robot normal')
+    axes[1].barh(y, jf, 0.25, label='robot-robot friction')
+    axes[1].barh(y + 0.25, jp, 0.25, label='body-plate friction')
+    axes[1].set_yticks(y, names, fontsize=7)
+    axes[1].set_xlabel('separating impulse per start, 20 periods (mN s; + = apart)')
+    axes[1].legend(fontsize=7)
+    fig.tight_layout()
+    path = OUT / 'mechanism.png'
+    fig.savefig(path, dpi=110)
+    return path
+
+
+def exp_figures(args: argparse.Namespace) -> None:
+    for f in args.which:
+        print({'trace': fig_trace, 'drift': fig_drift, 'mechanism': fig_mechanism}[f]())
+
+
+# ------------------------------------------------------------------ tables for docs/physics_study.md
+
+
+def richardson(points: list[tuple[float, float]]) -> float:
+    """First-order Richardson limit from the two finest (dt_inv, value) points (dt halving)."""
+    pts = sorted(points)
+    if len(pts) < 2:
+        return math.nan
+    (n1, f1), (n2, f2) = pts[-2], pts[-1]
+    ratio = n2 / n1
+    return f2 + (f2 - f1) / (ratio - 1.0)
+
+
+def exp_tables(args: argparse.Namespace) -> None:
+    groups: dict[tuple[str, str, str], list[tuple[float, float, float]]] = {}
+    for name in ('drift', 'drift_bw', 'drift_cone'):
+        for r in read_csv(name):
+            groups.setdefault((r['model'], r['set'], r['heading']), []).append(
+                (float(r['dt_inv']), float(r['net_um']), float(r['wall_per_sim_s'])))
+    print('| model | setting | heading (deg) | drift per cycle (um) at dt = 1/240, 1/480, 1/960, 1/1920, 1/3840 s '
+          '| Richardson limit | coarsest dt within 10 % |')
+    print('| --- | --- | ---: | --- | ---: | --- |')
+    for (model, st, head), pts in sorted(groups.items()):
+        by = {int(n): v for n, v, _ in pts}
+        lim = richardson([(n, v) for n, v, _ in pts])
+        ok = [n for n in sorted(by) if abs(by[n] - lim) <= 0.1 * abs(lim)]
+        coarse = next((n for n in sorted(by) if all(abs(by[m] - lim) <= 0.1 * abs(lim) for m in by if m >= n)), None)
+        cells = ', '.join(f'{by[n]:.1f}' if n in by else '-' for n in (240, 480, 960, 1920, 3840))
+        print(f'| {model} | {st or "-"} | {float(head):g} | {cells} | {lim:.1f} | '
+              f'{"1/" + str(coarse) if coarse else "none"} |')
+    rows = read_csv('pair')
+    if rows:
+        print('\n| dt | start (theta, phi, p2) | touching periods / 100 | longest touching run | r late (BL) | '
+              'phi late | travel (W) | wall s per sim s |')
+        print('| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |')
+        for r in rows:
+            print(f"| 1/{r['dt_inv']} | {float(r['theta0']):g}, {float(r['phi0']):g}, {float(r['p2']):g} | {r['touch']} | "
+                  f"{r['bound_run']} | {float(r['r_mean_late']):.3f} | {float(r['phi_late']):.0f} | "
+                  f"{float(r['travel_W']):.2f} | {float(r['wall_per_sim_s']):.3f} |")
+    rows = read_csv('mechanism')
+    if rows:
+        print('\n| variant | starts | touching in last 10 of 20 periods (95 % Wilson) | r_end mean +- se (BL) | '
+              'r_end >= 1.6 BL | J normal | J friction (robot-robot) | J plate | dr in contact / after (BL) | '
+              'max v_sep (m/s) | max depth (mm) |')
+        print('| --- | ---: | --- | --- | ---: | ---: | ---: | ---: | --- | ---: | ---: |')
+        for v in dict.fromkeys(r['variant'] for r in rows):
+            rs = [r for r in rows if r['variant'] == v]
+            k = sum(r['touch_last10'] == 'True' for r in rs)
+            lo, hi = wilson(k, len(rs))
+            re = np.array([float(r['r_end']) for r in rs])
+            m = lambda key: np.mean([float(r[key]) for r in rs]) * 1e3   # noqa: E731
+            print(f"| {v} | {len(rs)} | {k} ({lo:.2f}-{hi:.2f}) | {re.mean():.2f} +- {re.std(ddof=1) / math.sqrt(len(re)):.2f} | "
+                  f"{int((re >= 1.6).sum())} | {m('J_normal'):.0f} | {m('J_friction'):.0f} | {m('J_plate'):.0f} | "
+                  f"{m('dr_contact_BL') / 1e3:.2f} / {m('dr_coast_BL') / 1e3:.2f} | "
+                  f"{max(float(r['vsep_max']) for r in rs):.2f} | {max(float(r['depth_max_mm']) for r in rs):.1f} |")
+    for name in ('dense7', 'dense50'):
+        rows = read_csv(name)
+        if not rows:
+            continue
+        print(f'\n{name}:')
+        for jit in sorted({r['jitter'] for r in rows}):
+            rs = [r for r in rows if r['jitter'] == jit]
+            k = sum(bool(r['trouble']) for r in rs)
+            lo, hi = wilson(k, len(rs))
+            line = (f"jitter {jit}: {len(rs)} trials, trouble stops {k} (95 % Wilson {lo:.2f}-{hi:.2f}), "
+                    f"deepest overlap max {max(float(r['deepest_mm']) for r in rs):.2f} mm, "
+                    f"x real time {np.mean([float(r['x_real_time']) for r in rs]):.1f}")
+            if 'isolated_100' in rs[0] and rs[0].get('isolated_100', '') != '':
+                iso = sum(int(r['isolated_100'] or 0) > 0 for r in rs)
+                g100 = sum(int(r['gliders_100'] or 0) > 0 for r in rs)
+                a, b = wilson(iso, len(rs))
+                c1 = [int(x) for r in rs for x in r['c1_lives'].split()]
+                c2 = [int(x) for r in rs for x in r['c2_lives'].split()]
+                line += (f"; trials with a pair bound >= 100 periods {g100}; with an isolated one {iso} ({a:.2f}-{b:.2f}); "
+                         f"C1 gliders {len(c1)} median life {np.median(c1) if c1 else float('nan'):.0f}; "
+                         f"C2 {len(c2)} median {np.median(c2) if c2 else float('nan'):.0f}; best travel "
+                         f"{max(float(r['best_dist_W'] or 0) for r in rs):.2f} W")
+            print(line)
+            for r in rs:
+                if r['trouble']:
+                    print('   seed', r['seed'], r['trouble'])
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest='experiment', required=True)
@@ -597,8 +792,11 @@ def main() -> None:
     sub.choices['dense'].add_argument('--seeds', default='0-9')
     sub.choices['dense'].add_argument('--n', type=int, default=7)
     sub.choices['dense'].add_argument('--jitter', type=float, default=0.0)
+    sub.add_parser('tables')
+    p = sub.add_parser('figures')
+    p.add_argument('which', nargs='*', default=['trace', 'drift', 'mechanism'])
     args = parser.parse_args()
-    {'collide': exp_collide, 'mechanism': exp_mechanism, 'drift': exp_drift, 'pair': exp_pair,
+    {'tables': exp_tables, 'figures': exp_figures, 'collide': exp_collide, 'mechanism': exp_mechanism, 'drift': exp_drift, 'pair': exp_pair,
      'basin': exp_basin, 'dense': exp_dense}[args.experiment](args)
 
 
