@@ -59,6 +59,9 @@ MODELS: dict[str, dict[str, Any]] = {
 #: The candidate: the authors' model with a servo of fixed bandwidth 72 /s (the shipped servo's final
 #: approach at 1/240 s, now the same at every step), which sets P7's drift (docs/physics_study.md).
 MODELS['candidate'] = {**MODELS['authors'], 'servo_bandwidth': 72.0}
+#: The candidate with robots that stay flat (roll / pitch inertia x 100): restitution 0.85 tips robots in
+#: dense in-phase clusters otherwise (docs/physics_study.md, section C).
+MODELS['flat'] = {**MODELS['candidate'], 'tilt_inertia_scale': 100.0}
 
 
 def parse_value(text: str) -> Any:
@@ -129,6 +132,13 @@ def apply_extras(world: World, extras: dict[str, Any]) -> None:
         c.setPhysicsEngineParameter(**params)
     if 'x_plate_restitution' in extras:
         c.changeDynamics(world.plate_id, -1, restitution=float(extras['x_plate_restitution']))
+    if extras.get('x_tilt_inertia'):
+        # robots that stay flat: the body's roll / pitch inertia times this factor (yaw and mass unchanged)
+        for body in world.body_ids:
+            info = c.getDynamicsInfo(body, -1)
+            ixx, iyy, izz = info[2]
+            k = float(extras['x_tilt_inertia'])
+            c.changeDynamics(body, -1, localInertiaDiagonal=[ixx * k, iyy * k, izz])
     if extras.get('x_ccd'):
         for body in world.body_ids:
             for link in (-1, *ARM_JOINTS):

@@ -145,6 +145,9 @@ class PhysicsConfig:
     restitution_body_plate: float | None = None
     #: Bullet's continuous collision detection: swept-sphere radius (m) on every robot link; 0 = off.
     ccd_swept_sphere_radius: float = 0.0
+    #: Factor on the body's roll and pitch inertia (mass, yaw inertia and contacts unchanged): robots that
+    #: stay flat on the plate, as the real ones do. 1 = the box's own inertia.
+    tilt_inertia_scale: float = 1.0
 
     def __post_init__(self) -> None:
         _positive(self, 'time_step', 'control_tick', 'plate_size', 'plate_thickness', 'max_tilt',
@@ -165,6 +168,7 @@ class PhysicsConfig:
             if getattr(self, name) is not None:
                 _non_negative(self, name)
         _non_negative(self, 'ccd_swept_sphere_radius')
+        _positive(self, 'tilt_inertia_scale')
         if self.restitution_body_plate is not None and self.restitution_body_plate > 1.0:
             raise ConfigError(f'PhysicsConfig.restitution_body_plate must be in [0, 1], got {self.restitution_body_plate}')
         if self.link_frictions()[2] > 10.0:

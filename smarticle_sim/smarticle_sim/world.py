@@ -136,6 +136,10 @@ class World:
             for link in ARM_JOINTS:
                 c.changeDynamics(body, link, lateralFriction=arm_friction, restitution=restitution,
                                  rollingFriction=0.0, spinningFriction=0.0, jointDamping=0.0)
+            if ph.tilt_inertia_scale != 1.0:
+                ixx, iyy, izz = c.getDynamicsInfo(body, -1)[2]
+                c.changeDynamics(body, -1, localInertiaDiagonal=[ixx * ph.tilt_inertia_scale,
+                                                                 iyy * ph.tilt_inertia_scale, izz])
             if ph.ccd_swept_sphere_radius > 0.0:
                 for link in (-1, *ARM_JOINTS):
                     c.changeDynamics(body, link, ccdSweptSphereRadius=ph.ccd_swept_sphere_radius)
