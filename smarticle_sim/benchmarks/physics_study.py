@@ -334,6 +334,9 @@ VARIANTS: dict[str, dict[str, Any]] = {
     'candidate': {**MODELS['authors'], 'servo_bandwidth': 72.0},
     'authors + arm-arm friction 1.5': {**MODELS['authors'], 'friction_arm_arm': 1.5},
 }
+for _it in (5, 10, 20, 50):     # solver iterations at the candidate step, robots kept flat
+    VARIANTS[f'flat dt 1/480 it {_it}'] = {**MODELS['candidate'], 'tilt_inertia_scale': 100.0,
+                                           'time_step': 1.0 / 480, 'solver_iterations': _it}
 for _inv in (480, 960, 1920):   # the candidate's binding outcome against the time step
     VARIANTS[f'candidate dt 1/{_inv}'] = {**MODELS['candidate'], 'time_step': 1.0 / _inv}
     VARIANTS[f'default dt 1/{_inv}'] = {'time_step': 1.0 / _inv}
@@ -680,9 +683,110 @@ def fig_mechanism() -> Path:
     return path
 
 
+def fig_knee() -> Path:
+    """Run time against error: drift (candidate, 90 deg) and the binding fraction of the 22-start grid."""
+    plt = _plt()
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    for model, st, head, ax_i in (('candidate', '', '90.0', 0), ('candidate', '', '0.0', 0),
+                                  ('default', 'servo_bandwidth=72', '90.0', 0), ('default', '', '90.0', 0),
+                                  ('rigid', '', '90.0', 0)):
+        pts = sorted((int(r['dt_inv']), float(r['net_um']), float(r['wall_per_sim_s'])) for r in read_csv('drift')
+                     if r['model'] == model and r['set'] == st and r['heading'] == head)
+        if len(pts) < 3:
+            continue
+        lim = richardson([(n, v) for n, v, _ in pts])
+        err = [abs(v - lim) / abs(lim) * 100 for _, v, _ in pts]
+        ax = axes[ax_i]
+        ax.plot([w for *_, w in pts], err, 'o-', label=f'{model} {st} heading {float(head):g}')
+        for (n, _, w), e in zip(pts, err):
+            ax.annotate(f'1/{n}', (w, e), fontsize=6)
+    axes[0].axhline(10, color='k', ls='--', lw=0.8)
+    axes[0].set_xscale('log')
+    axes[0].set_yscale('log')
+    axes[0].set_xlabel('wall s per simulated s (one robot, shared machine)')
+    axes[0].set_ylabel('|drift - Richardson limit| (%)')
+    axes[0].legend(fontsize=6)
+    rows = read_csv('mechanism')
+    for base, names in (('candidate', ['candidate', 'candidate dt 1/480', 'candidate dt 1/960', 'candidate dt 1/1920']),
+                        ('default', ['default', 'default dt 1/480', 'dt 1/960', 'default dt 1/1920'])):
+        xs, ys, lo, hi = [], [], [], []
+        for name in names:
+            rs = [r for r in rows if r['variant'] == name]
+            if not rs:
+                continue
+            k = sum(r['touch_last10'] == 'True' for r in rs)
+            a, b = wilson(k, len(rs))
+            xs.append(np.mean([float(r['wall_s']) for r in rs]) / (float(rs[0]['periods']) * 1.6))
+            ys.append(k / len(rs))
+            lo.append(k / len(rs) - a)
+            hi.append(b - k / len(rs))
+        axes[1].errorbar(xs, ys, yerr=[lo, hi], fmt='o-', capsize=3, label=base)
+        for x, y, name in zip(xs, ys, names):
+            axes[1].annotate(name.split()[-1] if 'dt' in name else '1/240', (x, y), fontsize=6)
+    axes[1].set_xscale('log')
+    axes[1].set_xlabel('wall s per simulated s (pair)')
+    axes[1].set_ylabel('fraction of 22 starts touching late (95 % Wilson)')
+    axes[1].legend(fontsize=7)
+    fig.tight_layout()
+    path = OUT / 'knee.png'
+    fig.savefig(path, dpi=110)
+    return path
+
+
+def basin_summary(name: str = 'basin') -> list[str]:
+    """Quadrant / normal-orientation summary of a basin scan (bound = contact in the last 10 periods)."""
+    rows = read_csv(name)
+    out = []
+    for model_set in dict.fromkeys((r['model'], r['set']) for r in rows):
+        for phase in sorted({r['phase'] for r in rows}):
+            rs = [r for r in rows if (r['model'], r['set']) == model_set and r['phase'] == phase]
+            if not rs:
+                continue
+
+            def frac(sel: list[dict[str, str]], key: str = 'touch_last10') -> str:
+                k = sum(r[key] == 'True' for r in sel)
+                a, b = wilson(k, len(sel))
+                return f'{k}/{len(sel)} ({a:.2f}-{b:.2f})'
+            q14 = [r for r in rs if float(r['theta0']) < 90 or float(r['theta0']) >= 270]
+            q23 = [r for r in rs if 90 <= float(r['theta0']) < 270]
+            anti = [r for r in rs if abs(float(r['phi0']) - 180) <= 45]
+            par = [r for r in rs if min(float(r['phi0']), 360 - float(r['phi0'])) <= 45]
+            q14a = [r for r in q14 if r in anti]
+            q23a = [r for r in q23 if r in anti]
+            full = sum(r['bound_to_end'] == 'True' and int(r['bound_run']) >= 65 for r in rs)
+            r2 = sum(float(r['r_end']) < 2.0 for r in rs)
+            out.append(f"| {model_set[0]} {model_set[1]} | {phase} | {len(rs)} | {frac(rs)} | {full} | {r2} | {frac(q14)} | "
+                       f"{frac(q23)} | {frac(anti)} | {frac(par)} | {frac(q14a)} | {frac(q23a)} |")
+    return out
+
+
+def fig_basin(name: str = 'basin') -> Path:
+    plt = _plt()
+    rows = read_csv(name)
+    phases = sorted({r['phase'] for r in rows})
+    fig, axes = plt.subplots(1, max(1, len(phases)), figsize=(5.5 * max(1, len(phases)), 5))
+    axes = np.atleast_1d(axes)
+    for ax, phase in zip(axes, phases):
+        rs = [r for r in rows if r['phase'] == phase]
+        th = [float(r['theta0']) for r in rs]
+        ph = [float(r['phi0']) for r in rs]
+        col = ['tab:pink' if r['touch_last10'] == 'True' else 'tab:blue' for r in rs]
+        ax.scatter(th, ph, c=col, s=120, marker='s')
+        ax.set_xlabel('theta (deg)')
+        ax.set_ylabel('phi (deg)')
+        ax.set_xticks(range(0, 361, 90))
+        ax.set_yticks(range(0, 361, 90))
+        ax.set_title(f'{rs[0]["model"]} {rs[0]["set"]}, p = {phase}: pink bound (contact in last 10 of '
+                     f'{rs[0]["periods"]} periods), blue repelled, blank inadmissible', fontsize=7)
+    fig.tight_layout()
+    path = OUT / f'{name}.png'
+    fig.savefig(path, dpi=110)
+    return path
+
+
 def exp_figures(args: argparse.Namespace) -> None:
     for f in args.which:
-        print({'trace': fig_trace, 'drift': fig_drift, 'mechanism': fig_mechanism}[f]())
+        print({'trace': fig_trace, 'drift': fig_drift, 'mechanism': fig_mechanism, 'knee': fig_knee, 'basin': fig_basin}[f]())
 
 
 # ------------------------------------------------------------------ tables for docs/physics_study.md
@@ -740,16 +844,23 @@ def exp_tables(args: argparse.Namespace) -> None:
                   f"{int((re >= 1.6).sum())} | {m('J_normal'):.0f} | {m('J_friction'):.0f} | {m('J_plate'):.0f} | "
                   f"{m('dr_contact_BL') / 1e3:.2f} / {m('dr_coast_BL') / 1e3:.2f} | "
                   f"{max(float(r['vsep_max']) for r in rs):.2f} | {max(float(r['depth_max_mm']) for r in rs):.1f} |")
+    lines = basin_summary()
+    if lines:
+        print('\n| model | phase | admissible | bound (contact in last 10) | bound >= 65 of 75 periods to the end | r_end < 2 BL | '
+              'quadrants 1+4 | quadrants 2+3 | antiparallel (phi 135-225) | parallel (phi <= 45 or >= 315) | '
+              'Q1+4 antiparallel | Q2+3 antiparallel |')
+        print('| --- | --- | ---: | --- | ---: | ---: | --- | --- | --- | --- | --- | --- |')
+        print('\n'.join(lines))
     for name in ('dense7', 'dense50'):
         rows = read_csv(name)
         if not rows:
             continue
         print(f'\n{name}:')
-        for jit in sorted({r['jitter'] for r in rows}):
-            rs = [r for r in rows if r['jitter'] == jit]
+        for st, jit in sorted({(r['model'] + ' ' + r['set'], r['jitter']) for r in rows}):
+            rs = [r for r in rows if r['jitter'] == jit and r['model'] + ' ' + r['set'] == st]
             k = sum(bool(r['trouble']) for r in rs)
             lo, hi = wilson(k, len(rs))
-            line = (f"jitter {jit}: {len(rs)} trials, trouble stops {k} (95 % Wilson {lo:.2f}-{hi:.2f}), "
+            line = (f"{st}, jitter {jit}: {len(rs)} trials, trouble stops {k} (95 % Wilson {lo:.2f}-{hi:.2f}), "
                     f"deepest overlap max {max(float(r['deepest_mm']) for r in rs):.2f} mm, "
                     f"x real time {np.mean([float(r['x_real_time']) for r in rs]):.1f}")
             if 'isolated_100' in rs[0] and rs[0].get('isolated_100', '') != '':
