@@ -572,7 +572,8 @@ def exp_basin(args: argparse.Namespace) -> None:
         for theta in np.arange(0, 360, args.step):
             for phi in np.arange(0, 360, args.step):
                 try:
-                    row = {'model': args.model, 'set': ';'.join(args.set or []), 'dt_inv': args.dt or 240,
+                    row = {'model': args.model, 'set': ';'.join(args.set or []),
+                           'dt_inv': round(1.0 / make_config(settings)[0].physics.time_step),
                            'phase': p, **pair_run(settings, float(theta), float(phi), (p, p), args.periods)}
                 except SceneError:
                     continue
