@@ -787,7 +787,8 @@ def fig_basin(name: str = 'basin') -> Path:
 
 def exp_figures(args: argparse.Namespace) -> None:
     for f in args.which:
-        print({'trace': fig_trace, 'drift': fig_drift, 'mechanism': fig_mechanism, 'knee': fig_knee, 'basin': fig_basin}[f]())
+        print({'trace': fig_trace, 'drift': fig_drift, 'mechanism': fig_mechanism, 'knee': fig_knee, 'basin': fig_basin,
+               'basin_default': lambda: fig_basin('basin_default')}[f]())
 
 
 # ------------------------------------------------------------------ tables for docs/physics_study.md
@@ -845,7 +846,7 @@ def exp_tables(args: argparse.Namespace) -> None:
                   f"{int((re >= 1.6).sum())} | {m('J_normal'):.0f} | {m('J_friction'):.0f} | {m('J_plate'):.0f} | "
                   f"{m('dr_contact_BL') / 1e3:.2f} / {m('dr_coast_BL') / 1e3:.2f} | "
                   f"{max(float(r['vsep_max']) for r in rs):.2f} | {max(float(r['depth_max_mm']) for r in rs):.1f} |")
-    lines = basin_summary()
+    lines = basin_summary() + basin_summary('basin_default')
     if lines:
         print('\n| model | phase | admissible | bound (contact in last 10) | bound >= 65 of 75 periods to the end | r_end < 2 BL | '
               'quadrants 1+4 | quadrants 2+3 | antiparallel (phi 135-225) | parallel (phi <= 45 or >= 315) | '
