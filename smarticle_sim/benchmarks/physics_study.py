@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import argparse
 import csv
-import json
 import math
 import sys
 import time
@@ -32,7 +31,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pybullet
 from smarticle_driver.gait import GaitConfig
 
 from smarticle_sim.errors import SceneError, SimTrouble
@@ -287,7 +285,7 @@ def collisions(trace: dict[str, Any], merge: int = 3) -> list[dict[str, Any]]:
                        'kinds': '+'.join(sorted({kk for s in seg for kk in s[6].split('+') if kk})),
                        'vsep_end': rows[j][9], 'depth_mm': max(s[10] for s in seg) * 1e3})
         i = j + 1
-    for e, nxt in zip(events, events[1:] + [None]):
+    for e, nxt in zip(events, events[1:] + [None], strict=True):
         stop = nxt['start'] if nxt else n
         e['dr_after_mm'] = (rows[stop - 1][1] - rows[e['end']][1]) * 1e3
         e['J_plate_after'] = sum(s[4] for s in rows[e['end'] + 1:stop])
@@ -425,7 +423,7 @@ def pair_run(settings: dict[str, Any], theta: float, phi: float, phases: tuple[f
     t0 = time.perf_counter()
     trouble = ''
     try:
-        for q in range(periods):
+        for _ in range(periods):
             poses = world.poses()
             pc = pair_coordinates(poses[0], poses[1], BL)
             com.append(poses[:, :2].mean(axis=0))
@@ -637,7 +635,7 @@ def fig_drift() -> Path:
     cmap = plt.get_cmap('tab20')
     for idx, ((model, st, head), pts) in enumerate(sorted(groups.items())):
         pts.sort()
-        x, y = zip(*pts)
+        x, y = zip(*pts, strict=True)
         ax.plot([1 / v for v in x], y, 'os^vD<>'[idx % 7] + '-', color=cmap(idx % 20),
                 label=f'{model} {st} heading {float(head):g}')
     ax.axhline(75, color='k', ls='--', lw=0.8, label='paper 75 um')
@@ -699,7 +697,7 @@ def fig_knee() -> Path:
         err = [abs(v - lim) / abs(lim) * 100 for _, v, _ in pts]
         ax = axes[ax_i]
         ax.plot([w for *_, w in pts], err, 'o-', label=f'{model} {st} heading {float(head):g}')
-        for (n, _, w), e in zip(pts, err):
+        for (n, _, w), e in zip(pts, err, strict=True):
             ax.annotate(f'1/{n}', (w, e), fontsize=6)
     axes[0].axhline(10, color='k', ls='--', lw=0.8)
     axes[0].set_xscale('log')
@@ -722,7 +720,7 @@ def fig_knee() -> Path:
             lo.append(k / len(rs) - a)
             hi.append(b - k / len(rs))
         axes[1].errorbar(xs, ys, yerr=[lo, hi], fmt='o-', capsize=3, label=base)
-        for x, y, name in zip(xs, ys, names):
+        for x, y, name in zip(xs, ys, names, strict=False):
             axes[1].annotate(name.split()[-1] if 'dt' in name else '1/240', (x, y), fontsize=6)
     axes[1].set_xscale('log')
     axes[1].set_xlabel('wall s per simulated s (pair)')
@@ -756,7 +754,8 @@ def basin_summary(name: str = 'basin') -> list[str]:
             q23a = [r for r in q23 if r in anti]
             full = sum(r['bound_to_end'] == 'True' and int(r['bound_run']) >= 65 for r in rs)
             r2 = sum(float(r['r_end']) < 2.0 for r in rs)
-            out.append(f"| {model_set[0]} {model_set[1]} | {phase} | {len(rs)} | {frac(rs)} | {full} | {r2} | {frac(q14)} | "
+            out.append(f"| {model_set[0]} {model_set[1]} | {phase} | {len(rs)} | {frac(rs)} | {full} | {r2} | "
+                       f"{frac(q14)} | "
                        f"{frac(q23)} | {frac(anti)} | {frac(par)} | {frac(q14a)} | {frac(q23a)} |")
     return out
 
@@ -767,7 +766,7 @@ def fig_basin(name: str = 'basin') -> Path:
     phases = sorted({r['phase'] for r in rows})
     fig, axes = plt.subplots(1, max(1, len(phases)), figsize=(5.5 * max(1, len(phases)), 5))
     axes = np.atleast_1d(axes)
-    for ax, phase in zip(axes, phases):
+    for ax, phase in zip(axes, phases, strict=False):
         rs = [r for r in rows if r['phase'] == phase]
         th = [float(r['theta0']) for r in rs]
         ph = [float(r['phi0']) for r in rs]
@@ -816,7 +815,6 @@ def exp_tables(args: argparse.Namespace) -> None:
     for (model, st, head), pts in sorted(groups.items()):
         by = {int(n): v for n, v, _ in pts}
         lim = richardson([(n, v) for n, v, _ in pts])
-        ok = [n for n in sorted(by) if abs(by[n] - lim) <= 0.1 * abs(lim)]
         coarse = next((n for n in sorted(by) if all(abs(by[m] - lim) <= 0.1 * abs(lim) for m in by if m >= n)), None)
         cells = ', '.join(f'{by[n]:.1f}' if n in by else '-' for n in (240, 480, 960, 1920, 3840))
         print(f'| {model} | {st or "-"} | {float(head):g} | {cells} | {lim:.1f} | '
@@ -827,7 +825,8 @@ def exp_tables(args: argparse.Namespace) -> None:
               'phi late | travel (W) | wall s per sim s |')
         print('| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |')
         for r in rows:
-            print(f"| 1/{r['dt_inv']} | {float(r['theta0']):g}, {float(r['phi0']):g}, {float(r['p2']):g} | {r['touch']} | "
+            print(f"| 1/{r['dt_inv']} | {float(r['theta0']):g}, {float(r['phi0']):g}, {float(r['p2']):g} | "
+                  f"{r['touch']} | "
                   f"{r['bound_run']} | {float(r['r_mean_late']):.3f} | {float(r['phi_late']):.0f} | "
                   f"{float(r['travel_W']):.2f} | {float(r['wall_per_sim_s']):.3f} |")
     rows = read_csv('mechanism')
@@ -841,14 +840,16 @@ def exp_tables(args: argparse.Namespace) -> None:
             k = sum(r['touch_last10'] == 'True' for r in rs)
             lo, hi = wilson(k, len(rs))
             re = np.array([float(r['r_end']) for r in rs])
-            m = lambda key: np.mean([float(r[key]) for r in rs]) * 1e3   # noqa: E731
-            print(f"| {v} | {len(rs)} | {k} ({lo:.2f}-{hi:.2f}) | {re.mean():.2f} +- {re.std(ddof=1) / math.sqrt(len(re)):.2f} | "
+            m = lambda key, rs=rs: np.mean([float(r[key]) for r in rs]) * 1e3   # noqa: E731
+            print(f"| {v} | {len(rs)} | {k} ({lo:.2f}-{hi:.2f}) | "
+                  f"{re.mean():.2f} +- {re.std(ddof=1) / math.sqrt(len(re)):.2f} | "
                   f"{int((re >= 1.6).sum())} | {m('J_normal'):.0f} | {m('J_friction'):.0f} | {m('J_plate'):.0f} | "
                   f"{m('dr_contact_BL') / 1e3:.2f} / {m('dr_coast_BL') / 1e3:.2f} | "
                   f"{max(float(r['vsep_max']) for r in rs):.2f} | {max(float(r['depth_max_mm']) for r in rs):.1f} |")
     lines = basin_summary() + basin_summary('basin_default')
     if lines:
-        print('\n| model | phase | admissible | bound (contact in last 10) | bound >= 65 of 75 periods to the end | r_end < 2 BL | '
+        print('\n| model | phase | admissible | bound (contact in last 10) | '
+              'bound >= 65 of 75 periods to the end | r_end < 2 BL | '
               'quadrants 1+4 | quadrants 2+3 | antiparallel (phi 135-225) | parallel (phi <= 45 or >= 315) | '
               'Q1+4 antiparallel | Q2+3 antiparallel |')
         print('| --- | --- | ---: | --- | ---: | ---: | --- | --- | --- | --- | --- | --- |')
@@ -871,7 +872,8 @@ def exp_tables(args: argparse.Namespace) -> None:
                 a, b = wilson(iso, len(rs))
                 c1 = [int(x) for r in rs for x in r['c1_lives'].split()]
                 c2 = [int(x) for r in rs for x in r['c2_lives'].split()]
-                line += (f"; trials with a pair bound >= 100 periods {g100}; with an isolated one {iso} ({a:.2f}-{b:.2f}); "
+                line += (f"; trials with a pair bound >= 100 periods {g100}; "
+                         f"with an isolated one {iso} ({a:.2f}-{b:.2f}); "
                          f"C1 gliders {len(c1)} median life {np.median(c1) if c1 else float('nan'):.0f}; "
                          f"C2 {len(c2)} median {np.median(c2) if c2 else float('nan'):.0f}; best travel "
                          f"{max(float(r['best_dist_W'] or 0) for r in rs):.2f} W")
@@ -919,7 +921,8 @@ def main() -> None:
     p = sub.add_parser('figures')
     p.add_argument('which', nargs='*', default=['trace', 'drift', 'mechanism'])
     args = parser.parse_args()
-    {'tables': exp_tables, 'figures': exp_figures, 'collide': exp_collide, 'mechanism': exp_mechanism, 'drift': exp_drift, 'pair': exp_pair,
+    {'tables': exp_tables, 'figures': exp_figures, 'collide': exp_collide, 'mechanism': exp_mechanism,
+     'drift': exp_drift, 'pair': exp_pair,
      'basin': exp_basin, 'dense': exp_dense}[args.experiment](args)
 
 

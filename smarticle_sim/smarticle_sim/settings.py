@@ -139,7 +139,7 @@ class PhysicsConfig:
     #: is min(1, servo_bandwidth * time_step), the same approach at every step (0.3 / (1/240 s) = 72 /s).
     servo_bandwidth: float | None = None
     #: Bullet's restitutionVelocityThreshold (m/s): contacts approaching slower get no restitution. None:
-    #: Bullet's default (0.2 m/s), above most arm-contact speeds here, so restitution barely acts.
+    #: Bullet's default (0.2 m/s); most arm impacts here are faster, so restitution acts either way.
     restitution_velocity_threshold: float | None = None
     #: Body-plate restitution. None: the same as ``restitution`` (robot-robot).
     restitution_body_plate: float | None = None
@@ -170,7 +170,8 @@ class PhysicsConfig:
         _non_negative(self, 'ccd_swept_sphere_radius')
         _positive(self, 'tilt_inertia_scale')
         if self.restitution_body_plate is not None and self.restitution_body_plate > 1.0:
-            raise ConfigError(f'PhysicsConfig.restitution_body_plate must be in [0, 1], got {self.restitution_body_plate}')
+            raise ConfigError(f'PhysicsConfig.restitution_body_plate must be in [0, 1], '
+                              f'got {self.restitution_body_plate}')
         if self.link_frictions()[2] > 10.0:
             raise ConfigError(f'PhysicsConfig.friction_arm_arm: {self.friction_arm_arm} with friction_robot_robot '
                               f'{self.friction_robot_robot} leaves too little body friction to reach '
