@@ -28,6 +28,7 @@ setup(
             'smarticle-experiments = smarticle_experiments.cli:main',
             'smarticle-p6 = smarticle_experiments.p6:main',
             'smarticle-paper-probes = smarticle_experiments.paper_probes:main',
+            'smarticle-physics-study = smarticle_experiments.physics_study:main',
         ],
     },
 )

@@ -77,6 +77,8 @@ class Physics:
                                     numSubSteps=0, deterministicOverlappingPairs=1,
                                     contactBreakingThreshold=ph.contact_breaking_threshold,
                                     contactERP=ph.contact_erp)
+        if ph.restitution_velocity_threshold is not None:
+            c.setPhysicsEngineParameter(restitutionVelocityThreshold=ph.restitution_velocity_threshold)
         c.setGravity(0.0, 0.0, -ph.gravity)
         arm_friction, body_friction, plate_friction = ph.link_frictions()   # Bullet multiplies the pair's values
         restitution = math.sqrt(ph.restitution)
@@ -88,8 +90,11 @@ class Physics:
                                            rgbaColor=[0.75, 0.75, 0.78, 1.0])
         self.plate_id = c.createMultiBody(0.0, plate_shape, plate_visual,
                                           basePosition=[0.0, 0.0, -ph.plate_thickness / 2.0])
+        plate_restitution = restitution   # Bullet multiplies the pair's values, like friction
+        if ph.restitution_body_plate is not None:
+            plate_restitution = ph.restitution_body_plate / restitution if restitution > 0.0 else 0.0
         c.changeDynamics(self.plate_id, -1, lateralFriction=plate_friction,
-                         restitution=restitution, rollingFriction=0.0, spinningFriction=0.0)
+                         restitution=plate_restitution, rollingFriction=0.0, spinningFriction=0.0)
 
         w, d, h = spec.body_width, spec.body_depth, spec.body_height
         half_l = spec.arm_length / 2.0
@@ -127,6 +132,13 @@ class Physics:
             for link in ARM_JOINTS:
                 c.changeDynamics(body, link, lateralFriction=arm_friction, restitution=restitution,
                                  rollingFriction=0.0, spinningFriction=0.0, jointDamping=0.0)
+            if ph.tilt_inertia_scale != 1.0:
+                ixx, iyy, izz = c.getDynamicsInfo(body, -1)[2]
+                c.changeDynamics(body, -1, localInertiaDiagonal=[ixx * ph.tilt_inertia_scale,
+                                                                 iyy * ph.tilt_inertia_scale, izz])
+            if ph.ccd_swept_sphere_radius > 0.0:
+                for link in (-1, *ARM_JOINTS):
+                    c.changeDynamics(body, link, ccdSweptSphereRadius=ph.ccd_swept_sphere_radius)
             if not ph.arm_plate_collision:
                 for j in ARM_JOINTS:
                     c.setCollisionFilterPair(body, self.plate_id, j, -1, 0)
@@ -198,7 +210,7 @@ class Physics:
             self._client.setJointMotorControl2(
                 self.body_ids[k], j, pybullet.POSITION_CONTROL, targetPosition=targets[j],
                 targetVelocity=0.0, force=self.config.robot.servo_torque, maxVelocity=speed,
-                positionGain=self._physics.position_gain, velocityGain=1.0)
+                positionGain=self._physics.servo_gain(), velocityGain=1.0)
             last[j] = command
 
     # ----------------------------------------------------------------- stepping

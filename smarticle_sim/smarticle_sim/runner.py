@@ -56,6 +56,9 @@ class Runner:
         self.controllers: list[Controller] = list(controllers)
         #: The gait controller among ``controllers``, when built by ``with_gaits``.
         self.gaits: GaitController | None = None
+        #: Observers of every physics step (instruments that need each step, e.g. collision impulses); with
+        #: any, a tick steps the physics one step at a time, which gives the same trajectory.
+        self.step_hooks: list[Callable[[Runner], None]] = []
         self.tick_count = 0
         self._steps_per_tick = physics.steps_per_tick
         self._trouble_every = physics.config.physics.trouble_every
@@ -78,7 +81,13 @@ class Runner:
         """One control tick: controllers act, the physics steps, every few ticks a trouble check."""
         for controller in self.controllers:
             controller.before_tick(self)
-        self.physics.step(self._steps_per_tick)
+        if self.step_hooks:
+            for _ in range(self._steps_per_tick):
+                self.physics.step(1)
+                for hook in self.step_hooks:
+                    hook(self)
+        else:
+            self.physics.step(self._steps_per_tick)
         self.tick_count += 1
         if self.tick_count % self._trouble_every == 0:
             self.physics.check_trouble()

@@ -47,6 +47,21 @@ class PhysicsConfig:
     max_penetration: float = 0.004              # trouble: contact overlap (m) ...
     penetration_checks: int = 3                 # ... at this many trouble checks in a row (a spike is not a tunnel)
     trouble_every: int = 6                      # check for trouble every n control ticks
+    # --- issue #11 knobs (docs/physics_study.md); each default keeps the behaviour above unchanged ---
+    #: Servo loop bandwidth (1/s). None: the loop gain is ``position_gain`` per step, so the servo's final
+    #: approach (time constant time_step / position_gain) shrinks with the step. A number: the gain per step
+    #: is min(1, servo_bandwidth * time_step), the same approach at every step (0.3 / (1/240 s) = 72 /s).
+    servo_bandwidth: float | None = None
+    #: Bullet's restitutionVelocityThreshold (m/s): contacts approaching slower get no restitution. None:
+    #: Bullet's default (0.2 m/s); most arm impacts here are faster, so restitution acts either way.
+    restitution_velocity_threshold: float | None = None
+    #: Body-plate restitution. None: the same as ``restitution`` (robot-robot).
+    restitution_body_plate: float | None = None
+    #: Bullet's continuous collision detection: swept-sphere radius (m) on every robot link; 0 = off.
+    ccd_swept_sphere_radius: float = 0.0
+    #: Factor on the body's roll and pitch inertia (mass, yaw inertia and contacts unchanged): robots that
+    #: stay flat on the plate, as the real ones do. 1 = the box's own inertia.
+    tilt_inertia_scale: float = 1.0
 
     def __post_init__(self) -> None:
         require_positive(self, 'time_step', 'control_tick', 'plate_size', 'plate_thickness', 'max_tilt',
@@ -62,6 +77,17 @@ class PhysicsConfig:
                 raise ConfigError(f'PhysicsConfig.{name} must be an integer >= 1, got {value!r}')
         if self.friction_arm_arm is not None:
             require_positive(self, 'friction_arm_arm', error=ConfigError)
+        for name in ('servo_bandwidth',):
+            if getattr(self, name) is not None:
+                require_positive(self, name, error=ConfigError)
+        for name in ('restitution_velocity_threshold', 'restitution_body_plate'):
+            if getattr(self, name) is not None:
+                require_non_negative(self, name, error=ConfigError)
+        require_non_negative(self, 'ccd_swept_sphere_radius', error=ConfigError)
+        require_positive(self, 'tilt_inertia_scale', error=ConfigError)
+        if self.restitution_body_plate is not None and self.restitution_body_plate > 1.0:
+            raise ConfigError(f'PhysicsConfig.restitution_body_plate must be in [0, 1], '
+                              f'got {self.restitution_body_plate}')
         if self.link_frictions()[2] > 10.0:
             raise ConfigError(f'PhysicsConfig.friction_arm_arm: {self.friction_arm_arm} with friction_robot_robot '
                               f'{self.friction_robot_robot} leaves too little body friction to reach '
@@ -76,6 +102,12 @@ class PhysicsConfig:
     def steps_per_tick(self) -> int:
         """Physics steps in one control tick."""
         return steps_per_tick(self.control_tick, self.time_step)
+
+    def servo_gain(self) -> float:
+        """The servo loop's position gain per step given to Bullet (see ``servo_bandwidth``)."""
+        if self.servo_bandwidth is None:
+            return self.position_gain
+        return min(1.0, self.servo_bandwidth * self.time_step)
 
     def link_frictions(self) -> tuple[float, float, float]:
         """Return the (arm link, body link, plate) lateral friction values given to Bullet.

@@ -104,3 +104,17 @@ def test_batch_trial_with_extra_controllers_is_deterministic(config: SimConfig, 
     assert np.array_equal(first.poses, second.poses) and np.array_equal(first.arm_angles, second.arm_angles)
     assert halts[0] == halts[1] and len(halts[0]) == 1
     assert not np.array_equal(first.arm_angles, plain.arm_angles)   # the halt changed the run
+
+
+def test_step_hooks_see_every_physics_step_of_the_same_trajectory(config: SimConfig, gait90: GaitConfig) -> None:
+    scene = dense_scene(config.robot, gait90, 2, seed=1)
+    with Runner.with_gaits(config, scene) as plain, Runner.with_gaits(config, scene) as watched:
+        steps: list[float] = []
+        watched.step_hooks.append(lambda r: steps.append(r.time))
+        for run in (plain, watched):
+            assert run.gaits is not None
+            run.gaits.start(0.0)
+            run.run(run.ticks_for(1.0))
+        assert np.array_equal(plain.physics.poses(), watched.physics.poses())
+        assert len(steps) == watched.physics.step_count
+        assert steps[0] == pytest.approx(config.physics.time_step)

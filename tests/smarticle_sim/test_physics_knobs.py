@@ -1,0 +1,57 @@
+"""The opt-in physics knobs of issue #11 (docs/physics_study.md): defaults unchanged, values reach Bullet."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from smarticle_sim.errors import ConfigError
+from smarticle_sim.scenes import RobotPlacement, Scene
+from smarticle_sim.settings import PhysicsConfig, SimConfig
+from smarticle_sim.world import ARM_JOINTS, World
+
+
+def lone_robot() -> Scene:
+    """One robot at the plate centre."""
+    return Scene((RobotPlacement(0.0, 0.0, math.pi / 2),), name='lone')
+
+
+def test_defaults_keep_the_old_behaviour() -> None:
+    ph = PhysicsConfig()
+    assert ph.servo_bandwidth is None and ph.servo_gain() == ph.position_gain
+    assert ph.restitution_velocity_threshold is None and ph.restitution_body_plate is None
+    assert ph.ccd_swept_sphere_radius == 0.0 and ph.tilt_inertia_scale == 1.0
+
+
+def test_servo_bandwidth_fixes_the_approach_whatever_the_step() -> None:
+    for steps in (240, 480, 960):
+        ph = PhysicsConfig(time_step=1.0 / steps, control_tick=1.0 / 60.0, servo_bandwidth=72.0)
+        assert ph.servo_gain() / ph.time_step == pytest.approx(72.0)
+    assert PhysicsConfig(servo_bandwidth=1e6).servo_gain() == 1.0   # capped: arrive within one step
+
+
+@pytest.mark.parametrize('field', ['servo_bandwidth', 'tilt_inertia_scale'])
+def test_non_positive_knobs_refused(field: str) -> None:
+    with pytest.raises(ConfigError, match=field):
+        PhysicsConfig(**{field: 0.0})
+
+
+def test_restitution_body_plate_above_one_refused() -> None:
+    with pytest.raises(ConfigError, match='restitution_body_plate'):
+        PhysicsConfig(restitution_body_plate=1.5)
+
+
+def test_bullet_gets_the_restitutions_and_the_tilt_inertia(config: SimConfig) -> None:
+    """Bullet multiplies the links' restitutions: robot-robot 0.85, body-plate 0; roll / pitch inertia x 100."""
+    plain = config.with_physics(restitution=0.85)
+    tuned = config.with_physics(restitution=0.85, restitution_body_plate=0.0, tilt_inertia_scale=100.0)
+    with World(plain, lone_robot()) as world:
+        inertia = world.client.getDynamicsInfo(world.body_ids[0], -1)[2]
+    with World(tuned, lone_robot()) as world:
+        c, body = world.client, world.body_ids[0]
+        restitution = {link: c.getDynamicsInfo(body, link)[5] for link in (-1, *ARM_JOINTS)}
+        assert restitution[-1] * restitution[ARM_JOINTS[0]] == pytest.approx(0.85, rel=1e-5)
+        assert restitution[-1] * c.getDynamicsInfo(world.plate_id, -1)[5] == pytest.approx(0.0, abs=1e-9)
+        scaled = c.getDynamicsInfo(body, -1)[2]
+        assert scaled == pytest.approx([100.0 * inertia[0], 100.0 * inertia[1], inertia[2]], rel=1e-5)
