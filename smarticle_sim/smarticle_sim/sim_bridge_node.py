@@ -36,6 +36,10 @@ def _msg(key: str) -> Any:
     return topics.message_class(topics.spec_of(key).type)
 
 
+#: Wall seconds the bridge waits after the awaited subscribers have matched (their side of the match).
+SUBSCRIBER_SETTLE = 0.5
+
+
 class SimBridgeNode(Node):
     """Thin ROS shell around SimBridgeCore."""
 
@@ -224,7 +228,12 @@ class SimBridgeNode(Node):
         return 0
 
     def wait_for_subscribers(self, executor: SingleThreadedExecutor) -> None:
-        """Hold the start until /smarticles/poses has the configured number of subscribers."""
+        """Hold the start until /smarticles/poses has the configured number of subscribers.
+
+        The count is the publisher's side of the match; a best-effort subscriber drops what arrives before
+        its own side has matched, so once the count is reached the bridge waits SUBSCRIBER_SETTLE more
+        seconds (wall time) before the first publication.
+        """
         started = time.monotonic()
         while rclpy.ok() and (
                 self.poses_pub.get_subscription_count() < self.settings.wait_for_subscribers
@@ -233,6 +242,10 @@ class SimBridgeNode(Node):
             if time.monotonic() - started > 5.0:
                 self.get_logger().warning('waiting for subscribers of /smarticles/poses and '
                                           '/overhead_camera/image_raw', throttle_duration_sec=5.0)
+        if self.settings.wait_for_subscribers or self.settings.wait_for_camera_subscribers:
+            settle = time.monotonic() + SUBSCRIBER_SETTLE
+            while rclpy.ok() and time.monotonic() < settle:
+                executor.spin_once(timeout_sec=0.05)
 
     def wait_for_commands(self, executor: SingleThreadedExecutor) -> None:
         """Lock-step barrier: spin until every robot's command for the current time has arrived."""

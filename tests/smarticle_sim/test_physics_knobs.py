@@ -9,7 +9,8 @@ import pytest
 from smarticle_sim.errors import ConfigError
 from smarticle_sim.scenes import RobotPlacement, Scene
 from smarticle_sim.settings import PhysicsConfig, SimConfig
-from smarticle_sim.world import ARM_JOINTS, World
+from smarticle_sim.physics import ARM_JOINTS
+from smarticle_sim.runner import Runner
 
 
 def lone_robot() -> Scene:
@@ -46,9 +47,11 @@ def test_bullet_gets_the_restitutions_and_the_tilt_inertia(config: SimConfig) ->
     """Bullet multiplies the links' restitutions: robot-robot 0.85, body-plate 0; roll / pitch inertia x 100."""
     plain = config.with_physics(restitution=0.85)
     tuned = config.with_physics(restitution=0.85, restitution_body_plate=0.0, tilt_inertia_scale=100.0)
-    with World(plain, lone_robot()) as world:
+    with Runner.with_gaits(plain, lone_robot()) as run:
+        world = run.physics
         inertia = world.client.getDynamicsInfo(world.body_ids[0], -1)[2]
-    with World(tuned, lone_robot()) as world:
+    with Runner.with_gaits(tuned, lone_robot()) as run:
+        world = run.physics
         c, body = world.client, world.body_ids[0]
         restitution = {link: c.getDynamicsInfo(body, link)[5] for link in (-1, *ARM_JOINTS)}
         assert restitution[-1] * restitution[ARM_JOINTS[0]] == pytest.approx(0.85, rel=1e-5)
