@@ -30,7 +30,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from smarticle_common.facts import RobotSpec
+from smarticle_common.facts import GAIT_PERIOD, R_BIND_BL, RobotSpec
 from smarticle_common.gait import GaitConfig
 from smarticle_common.pairs import one_pair
 
@@ -505,7 +505,7 @@ def dense_run(settings: dict[str, Any], seed: int, periods: int, n: int = 7, jit
                            'x_real_time': (times[-1] if times else 0.0) / wall, 'deepest_mm': deepest * 1e3,
                            'trouble': trouble}
     if n == 7 and len(times) > per:
-        cfg = GliderConfig(period=gait.period, r_bind=1.6 * BL, min_periods=30, body_length=BL, width=BL)
+        cfg = GliderConfig(period=gait.period, r_bind=R_BIND_BL * BL, min_periods=30, body_length=BL, width=BL)
         pos = np.array(poses)
         an = analyse_gliders(np.array(times), pos, cfg, contacts=np.array(contacts))
         gl = an.gliders
@@ -715,7 +715,7 @@ def fig_knee() -> Path:
                 continue
             k = sum(r['touch_last10'] == 'True' for r in rs)
             a, b = wilson(k, len(rs))
-            xs.append(np.mean([float(r['wall_s']) for r in rs]) / (float(rs[0]['periods']) * 1.6))
+            xs.append(np.mean([float(r['wall_s']) for r in rs]) / (float(rs[0]['periods']) * GAIT_PERIOD))
             ys.append(k / len(rs))
             lo.append(k / len(rs) - a)
             hi.append(b - k / len(rs))
@@ -843,7 +843,8 @@ def exp_tables(args: argparse.Namespace) -> None:
             m = lambda key, rs=rs: np.mean([float(r[key]) for r in rs]) * 1e3   # noqa: E731
             print(f"| {v} | {len(rs)} | {k} ({lo:.2f}-{hi:.2f}) | "
                   f"{re.mean():.2f} +- {re.std(ddof=1) / math.sqrt(len(re)):.2f} | "
-                  f"{int((re >= 1.6).sum())} | {m('J_normal'):.0f} | {m('J_friction'):.0f} | {m('J_plate'):.0f} | "
+                  f"{int((re >= R_BIND_BL).sum())} | {m('J_normal'):.0f} | {m('J_friction'):.0f} | "
+                  f"{m('J_plate'):.0f} | "
                   f"{m('dr_contact_BL') / 1e3:.2f} / {m('dr_coast_BL') / 1e3:.2f} | "
                   f"{max(float(r['vsep_max']) for r in rs):.2f} | {max(float(r['depth_max_mm']) for r in rs):.1f} |")
     lines = basin_summary() + basin_summary('basin_default')
