@@ -78,7 +78,8 @@ def test_the_namespace_names_the_robot_and_a_disagreeing_robot_id_is_refused(nod
                              topics.qos_profile(topics.spec_of('joint_commands').qos))
     nodes.start('gait', '--ros-args', '-r', '__ns:=/smarticle_3', '-p', 'autostart:=true')
     assert spin_until(node, lambda: bool(seen), 20.0), 'no commands on /smarticle_3/joint_commands'
-    assert ('gait', '/smarticle_3') in node.get_node_names_and_namespaces()
+    assert spin_until(node, lambda: ('gait', '/smarticle_3') in node.get_node_names_and_namespaces(), 20.0), \
+        node.get_node_names_and_namespaces()     # the graph (node names) is discovered apart from topics
     proc = subprocess.run([executable('gait'), '--ros-args', '-r', '__ns:=/smarticle_3', '-p', 'robot_id:=2'],
                           capture_output=True, text=True, timeout=30)
     assert proc.returncode == 2
