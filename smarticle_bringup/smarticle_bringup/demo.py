@@ -59,7 +59,11 @@ def report_graph(names: list[str], path: Path) -> None:
                                                        'every fully qualified name distinct') + f' ({path})')
 
 
-def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.ndarray, float]:
+#: Exit code of the sim bridge when the physics hit trouble (SimTrouble): the run stopped early.
+SIM_TROUBLE_EXIT = 3
+
+
+def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.ndarray, float, str]:
     """Run sim bridge + gait nodes; return sample times (s after the start), poses (T, N, 3), RTF."""
     import os
 
@@ -153,7 +157,11 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
             for _ in range(20):
                 rclpy.spin_once(node, timeout_sec=0.02)
             wall = time.monotonic() - wall0
-            if bridge.returncode != 0:
+            trouble = ''
+            if bridge.returncode == SIM_TROUBLE_EXIT:   # the physics stopped: keep what arrived, say why
+                lines = [line for line in group.output(bridge).splitlines() if 'sim trouble' in line]
+                trouble = lines[-1].split('sim trouble: ', 1)[-1] if lines else 'sim trouble'
+            elif bridge.returncode != 0:
                 raise RuntimeError(f'sim bridge exited with code {bridge.returncode}:\n'
                                    + group.output(bridge)[-2000:])
             info = recording.stop()
@@ -174,7 +182,7 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
     stamps = np.array(sorted(samples))
     poses = np.array([samples[s] for s in stamps])
     rtf = (stamps[-1] * 1e-9) / wall if len(stamps) else 0.0
-    return stamps * 1e-9 - START_AT, poses, rtf
+    return stamps * 1e-9 - START_AT, poses, rtf, trouble
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -190,12 +198,16 @@ def main(argv: list[str] | None = None) -> int:
         print('demo: --robots must be >= 1 and --periods > 0', file=sys.stderr)
         return 2
     args.out.mkdir(parents=True, exist_ok=True)
-    times, poses, rtf = run_stack(args, args.out / 'logs')
+    times, poses, rtf, trouble = run_stack(args, args.out / 'logs')
+    if trouble:
+        print(f'[demo] THE SIMULATION STOPPED EARLY: {trouble}\n[demo] the analysis below covers the run up to '
+              'that point (the physics at the default settings is not yet stable: docs/physics_study.md)')
     keep = times >= 0.0
     times, poses = times[keep], poses[keep]
     save_npz(Recording.from_poses(times, poses, SMALL.body_length,
                                   {'source': 'demo: /smarticles/poses over DDS', 'periods': args.periods,
-                                   'seed': args.seed, 'scene': args.scene}), args.out / 'poses.npz')
+                                   'seed': args.seed, 'scene': args.scene, 'trouble': trouble}),
+             args.out / 'poses.npz')
     config = GliderConfig(min_periods=args.min_periods)
     report = glider_report(times, poses, config, args.out / 'gliders.png')
     print(f'\n[demo] {args.robots} robots, {args.scene} start, alpha_max {args.alpha_max:g} deg, '

@@ -1,16 +1,18 @@
 """The common contract of the smarticle stack: what every other package agrees on.
 
-Modules (no rclpy import in any of them except ``params.spin_node`` / ``declare_and_read``, which import
-it when called):
+Modules (no rclpy import in any of them but ``node``, the node helper):
 
 * ``facts``: robot facts, defined once (``RobotSpec``, ``SMALL``, ``FEEDBACK``, ``GAIT_PERIOD``,
   ``SERVO_SPEED``, ``TAG_SIZE``, ``TAG_DICTIONARY``, ``R_BIND_BL``, ``BODY_LENGTH``);
 * ``topics``: the topic contract (names, types, QoS kinds, frames, units), documented in docs/topics.md;
 * ``gait``: the square gait core that the gait node and the sim's gait controller both run;
 * ``pairs``: pair coordinates r, theta, phi (the one implementation; metres and radians);
-* ``poses``: planar pose <-> quaternion conversions;
+* ``poses``: planar pose <-> quaternion conversions, a Bullet body's heading and tilt, tag corners;
+* ``messages``: planar poses to and from ``geometry_msgs`` Pose and PoseArray;
+* ``runs``: the one run format on disk (batch trials, the demo, ``smarticle-bag export --run``);
 * ``commands``: the joint-command checks shared by the servo bridge and the sim bridge;
-* ``params``: parameter tables (``ParamSpec``), shipped YAML defaults and the node helper;
+* ``params``: parameter tables (``ParamSpec``, ``ROBOT_ID_PARAM``) and their shipped YAML defaults;
+* ``node``: the node helper (``read_config``, ``DiagnosticsPublisher``, ``resolve_robot_id``, ``run_node``);
 * ``launching``: the process launcher of tests, benchmarks and the demo;
 * ``errors``: ``CommonError`` and its subclasses.
 """

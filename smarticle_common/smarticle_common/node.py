@@ -107,11 +107,11 @@ class DiagnosticsPublisher:
         self.node, self.name, self.hardware_id = node, name, hardware_id
         self.publisher = node.create_publisher(DiagnosticArray, spec.resolve(), topics.qos_profile(spec.qos))
 
-    def publish(self, level: int, message: str, values: Mapping[str, object] = {}) -> None:
+    def publish(self, level: int, message: str, values: Mapping[str, object] | None = None) -> None:
         """Publish one status now; ``values`` become KeyValue pairs (as text)."""
         status = DiagnosticStatus(level=bytes([level]), name=self.name, message=message,
                                   hardware_id=self.hardware_id)
-        status.values = [KeyValue(key=str(k), value=str(v)) for k, v in values.items()]
+        status.values = [KeyValue(key=str(k), value=str(v)) for k, v in (values or {}).items()]
         array = DiagnosticArray(status=[status])
         array.header.stamp = self.node.get_clock().now().to_msg()
         try:

@@ -13,7 +13,7 @@ it as YAML::
       tags_used: 16
       source: board 4x4 ...
 
-No rclpy here; the ``tracker_calibrate`` command is in ``calibrate_cli.py``.
+No rclpy here; the ``smarticle-tracker-calibrate`` command is in ``homography_cli.py``.
 """
 
 from __future__ import annotations
@@ -145,7 +145,7 @@ def save_calibration(path: str | Path, calibration: Calibration) -> Path:
 def load_calibration(path: str | Path) -> Calibration:
     """Read a calibration YAML; CalibrationError says what is missing or wrong and how to make one."""
     source = Path(path)
-    hint = 'make one with tracker_calibrate'
+    hint = 'make one with smarticle-tracker-calibrate (or smarticle-sim-camera-calibrate for the sim camera)'
     if not source.is_file():
         raise CalibrationError(f'calibration file {str(source)!r} does not exist; {hint}')
     try:

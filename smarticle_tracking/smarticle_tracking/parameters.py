@@ -24,11 +24,11 @@ from smarticle_common.facts import GAIT_PERIOD, SMALL, TAG_DICTIONARY, TAG_SIZE
 TRACKER_NODE = 'tracker'
 MONITOR_NODE = 'glider_monitor'
 CONFIG_DIR = Path(__file__).resolve().parents[1] / 'config'
-#: The calibration of the sim camera at its default settings (made by ``tracker_calibrate --sim``).
+#: The calibration of the sim camera at its default settings (made by ``smarticle-sim-camera-calibrate``).
 SIM_CALIBRATION = CONFIG_DIR / 'sim_overhead_calibration.yaml'
 
 TRACKER_PARAMS: tuple[ParamSpec, ...] = (
-    ParamSpec('calibration_file', '', 'plane-homography YAML from tracker_calibrate; empty = the shipped '
+    ParamSpec('calibration_file', '', 'plane-homography YAML from smarticle-tracker-calibrate; empty = the shipped '
               'calibration of the sim camera at its defaults (config/sim_overhead_calibration.yaml)'),
     ParamSpec('dictionary', TAG_DICTIONARY, 'OpenCV ArUco dictionary of the tags'),
     ParamSpec('tag_ids', [0, 1, 2, 3, 4, 5, 6], 'tag id of each robot (integer list): the k-th id is robot k'),

@@ -203,7 +203,7 @@ class TagTracker:
         cal = self.calibration
         if (w, h) != (cal.width, cal.height):
             raise FrameSizeError(f'frame is {w}x{h} px but the calibration is for {cal.width}x{cal.height}; '
-                                    'recalibrate for this resolution (tracker_calibrate)')
+                                    'recalibrate for this resolution (smarticle-tracker-calibrate)')
         return image
 
     def to_arena(self, pixel_corners: FloatArray, camera_matrix: FloatArray | None = None,

@@ -3,7 +3,7 @@
 Ground truth: 7 robots (dense scene, seed 1) running the square gait in the PyBullet world, sampled
 every 0.4 s (all arm shapes of the gait). Each sample is rendered by ``smarticle_sim.camera`` (OpenCV
 path) and tracked by ``smarticle_tracking.tracker`` with a calibration made the way a user would (a
-rendered board, ``tracker_calibrate --sim``). OpenCV runs on one thread (``cv2.setNumThreads(1)``).
+rendered board, ``smarticle-sim-camera-calibrate``). OpenCV runs on one thread (``cv2.setNumThreads(1)``).
 Per setting: detection rate, median and 95th percentile position error (mm) and heading error (deg),
 and median tracker time per frame. Writes ``out/benchmarks/tracker.csv`` and ``tracker.png``.
 
