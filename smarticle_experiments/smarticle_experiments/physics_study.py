@@ -61,6 +61,14 @@ MODELS['candidate'] = {**MODELS['authors'], 'servo_bandwidth': 72.0}
 #: The candidate with robots that stay flat (roll / pitch inertia x 100): restitution 0.85 tips robots in
 #: dense in-phase clusters otherwise (docs/physics_study.md, section C).
 MODELS['flat'] = {**MODELS['candidate'], 'tilt_inertia_scale': 100.0}
+#: The proposed default (docs/sim_calibration.md): flat robots, a 0.05 N m servo of bandwidth 200 /s at 1/480 s.
+#: The gait runs at the servo's top speed as the SPEC says (the authors' Chrono speed is dropped).
+MODELS['proposed'] = {**{k: v for k, v in MODELS['flat'].items() if k != 'gait_speed'},
+                      'servo_torque': 0.05, 'servo_bandwidth': 200.0, 'time_step': 1.0 / 480}
+#: The proposed model with compliant contacts (Bullet contact stiffness and damping on robot links, no
+#: restitution impulse), closer to a smooth-contact (penalty) model: e = 0.85 for a 30 g pair at k 2000 N/m.
+MODELS['proposed soft'] = {**MODELS['proposed'], 'restitution': 0.0, 'x_contact_stiffness': 2000.0,
+                           'x_contact_damping': 0.8}
 
 
 def parse_value(text: str) -> Any:
@@ -138,6 +146,11 @@ def apply_extras(world: Physics, extras: dict[str, Any]) -> None:
             ixx, iyy, izz = info[2]
             k = float(extras['x_tilt_inertia'])
             c.changeDynamics(body, -1, localInertiaDiagonal=[ixx * k, iyy * k, izz])
+    if extras.get('x_contact_stiffness'):
+        for body in world.body_ids:
+            for link in (-1, *ARM_JOINTS):
+                c.changeDynamics(body, link, contactStiffness=float(extras['x_contact_stiffness']),
+                                 contactDamping=float(extras.get('x_contact_damping', 0.0)))
     if extras.get('x_ccd'):
         for body in world.body_ids:
             for link in (-1, *ARM_JOINTS):
@@ -332,6 +345,8 @@ VARIANTS: dict[str, dict[str, Any]] = {
     'candidate': {**MODELS['authors'], 'servo_bandwidth': 72.0},
     'authors + arm-arm friction 1.5': {**MODELS['authors'], 'friction_arm_arm': 1.5},
 }
+VARIANTS['proposed'] = MODELS['proposed']
+VARIANTS['proposed soft'] = MODELS['proposed soft']
 for _it in (5, 10, 20, 50):     # solver iterations at the candidate step, robots kept flat
     VARIANTS[f'flat dt 1/480 it {_it}'] = {**MODELS['candidate'], 'tilt_inertia_scale': 100.0,
                                            'time_step': 1.0 / 480, 'solver_iterations': _it}

@@ -9,8 +9,10 @@ the results are in body lengths (``_bl``) or in W (``_w``, W = BL for the smarti
 (``_deg``), speeds as stated. ``trouble`` is the SimTrouble message that ended the trial early ('' if
 none): such a trial still returns what it measured, and the report counts and lists it.
 
-Isolation rule of a glider (the glider analysis has none): **isolated** = in every frame of its bound
-periods, no third robot's centre lies within ``isolation_w`` W (default 2 W) of either robot's centre.
+Gliders follow the glider analysis's rules (``smarticle_tracking.gliders``, docs/gliders.md): bound = r
+under ``r_bind_bl`` (1.6 BL) in any frame of a period, from the poses; **isolated** = in at least 90 % of
+its bound periods no third robot's centre comes within ``isolation_w`` W (default 2 W) of either robot's
+centre. P1 counts trials with an isolated glider of at least ``positive_periods`` periods.
 """
 
 from __future__ import annotations
@@ -77,24 +79,7 @@ def _finite(value: float) -> float | None:
     return float(value) if math.isfinite(value) else None
 
 
-def isolated(rec_time: np.ndarray, poses: np.ndarray, glider: Glider, period: float, limit: float) -> bool:
-    """True if no third robot's centre comes within ``limit`` (m) of either glider robot in its bound periods."""
-    n = poses.shape[1]
-    others = [k for k in range(n) if k not in (glider.i, glider.j)]
-    if not others:
-        return True
-    t0 = float(rec_time[0])
-    in_run = (rec_time >= t0 + glider.start_period * period - 1e-9) & \
-        (rec_time < t0 + (glider.start_period + glider.lifetime_periods) * period - 1e-9)
-    xy = poses[in_run, :, :2]
-    for k in (glider.i, glider.j):
-        d = np.linalg.norm(xy[:, others, :] - xy[:, k:k + 1, :], axis=2)
-        if np.any(d < limit):
-            return False
-    return True
-
-
-def glider_record(g: Glider, rec: Recording, period: float, bl: float, isolation_w: float) -> dict[str, Any]:
+def glider_record(g: Glider, period: float, bl: float) -> dict[str, Any]:
     """One glider as a JSON-ready dict (lengths in BL = W, angles in degrees)."""
     return {
         'i': g.i, 'j': g.j, 'class': g.glider_class.value, 'start_period': g.start_period,
@@ -102,21 +87,19 @@ def glider_record(g: Glider, rec: Recording, period: float, bl: float, isolation
         'r_bl': _finite(g.r_mean / bl), 'theta_deg': _finite(math.degrees(g.theta_mean) % 360.0),
         'phi_deg': _finite(math.degrees(g.phi_mean) % 360.0), 'distance_w': _finite(g.distance / bl),
         'path_w': _finite(g.path_length / bl), 'v_com_w_per_period': _finite(g.v_com * period / bl),
-        'beta': _finite(g.beta), 'isolated': isolated(rec.time, rec.poses, g, period, isolation_w * bl),
+        'beta': _finite(g.beta), 'isolated': g.isolated, 'isolation': round(g.isolation, 4),
         'com_path_w': _rounded(g.com_path / bl, 4),
     }
 
 
 def analyse_recording(config: SimConfig, rec: Recording, period: float, p: Mapping[str, Any]) -> dict[str, Any]:
-    """Gliders of a recording (glider analysis with contacts) plus per-trial figures and a short trajectory."""
+    """Gliders of a recording (the glider analysis's one bound rule, on poses) plus per-trial figures."""
     bl = config.robot.body_length
-    n = rec.poses.shape[1]
-    iu = np.triu_indices(n, 1)
-    contacts = rec.contacts[:, iu[0], iu[1]]
     gcfg = GliderConfig(period=period, r_bind=float(p['r_bind_bl']) * bl, min_periods=int(p['min_periods']),
+                        isolation_distance=float(p['isolation_w']) * bl,
                         body_length=bl, width=bl)
-    analysis = analyse_gliders(rec.time, rec.poses, gcfg, contacts=contacts)
-    gliders = [glider_record(g, rec, period, bl, float(p['isolation_w'])) for g in analysis.gliders]
+    analysis = analyse_gliders(rec.time, rec.poses, gcfg)
+    gliders = [glider_record(g, period, bl) for g in analysis.gliders]
     per = max(1, round(period / (config.physics.control_tick * rec.meta['sample_every'])))
     positive = int(p['positive_periods'])
     longest = max(gliders, key=lambda g: g['lifetime_periods'], default=None)
@@ -143,7 +126,7 @@ def dense_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
     config = _config_of(p)
     gait = make_gait(config, p['alpha_max_deg'], p['servo_speed'])
     scene = dense_scene(config.robot, gait, n=int(p['robots']), seed=seed, phase_jitter=float(p['phase_jitter']))
-    rec = run_trial(config, scene, float(p['periods']), sample_every=int(p['sample_every']), record_contacts=True)
+    rec = run_trial(config, scene, float(p['periods']), sample_every=int(p['sample_every']), record_contacts=False)
     return analyse_recording(config, rec, gait.period, p)
 
 

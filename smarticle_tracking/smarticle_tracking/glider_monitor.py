@@ -2,9 +2,12 @@
 
 Feed ``update(time, poses)`` in time order; it returns the pairs bound right now. A pair is reported
 while its run of bound periods is open: it was bound in the last completed period, or it has bound
-(contact or r < r_bind) in the current period already. Its ``age`` counts the run's periods, the
-current one included once it has bound. When a period closes, runs that did not bind end; those of
-at least K periods go to ``finished`` (a bounded history). Memory is O(pairs + history), not O(frames).
+(r < r_bind, the one bound rule of the batch analysis) in the current period already. Its ``age``
+counts the run's periods, the current one included once it has bound. When a period closes, runs
+that did not bind end; those of at least K periods go to ``finished`` (a bounded history). Memory is
+O(pairs + history), not O(frames).
+A run's ``isolation`` counts its periods in which no third robot came within ``isolation_distance`` of
+either robot, as in the batch analysis.
 
 All maths comes from :mod:`smarticle_common.pairs` and :mod:`smarticle_tracking.gliders`
 (pair_coordinates, pair_centres, period_index, frame_hits, frame_sums, stretch_means,
@@ -42,6 +45,8 @@ class BoundPair(NamedTuple):
     age: float               # s, age_periods x T
     is_glider: bool          # age_periods >= K
     distance: float          # m, net centre-of-mass displacement over the run (per-period samples)
+    isolation: float = 1.0   # fraction of the run's periods with no third robot within isolation_distance
+    isolated: bool = True    # isolation >= isolated_fraction: a pair, not part of a cluster
 
 
 class GliderMonitor:
@@ -81,6 +86,12 @@ class GliderMonitor:
         n = len(self.pairs)
         fields = len(SUM_FIELDS)
         self._hit = np.zeros(n, dtype=bool)
+        self._crowd = np.zeros(n, dtype=bool)        # a third robot came near in the current period
+        self._run_crowded = np.zeros(n, dtype=np.intp)
+        others = np.ones((n, n_robots), dtype=bool)
+        others[np.arange(n), self.pairs[:, 0]] = False
+        others[np.arange(n), self.pairs[:, 1]] = False
+        self._others = others
         self._sums = np.zeros((n, fields))
         self._strobe = np.full((n, 2), np.nan)
         self._run_len = np.zeros(n, dtype=np.intp)
@@ -135,6 +146,11 @@ class GliderMonitor:
         """Add one frame's coordinates, hits, sums and centre of mass to the current period."""
         coords = pair_coordinates(frame, self.pairs)
         self._hit |= frame_hits(coords.r, self.config.r_bind, mask)[0]
+        if frame.shape[1] > 2:
+            xy = frame[0, :, :2]
+            with np.errstate(invalid='ignore'):
+                near = np.linalg.norm(xy[:, None, :] - xy[None, :, :], axis=2) < self.config.isolation_distance
+            self._crowd |= np.any((near[self.pairs[:, 0]] | near[self.pairs[:, 1]]) & self._others, axis=1)
         self._sums += frame_sums(coords)[0]
         centres = pair_centres(frame, self.pairs)[0]
         first = np.all(np.isnan(self._strobe), axis=1) & np.all(np.isfinite(centres), axis=1)
@@ -154,7 +170,9 @@ class GliderMonitor:
         self._run_sums[new] = 0.0
         self._run_first[new] = np.nan
         self._run_last[new] = np.nan
+        self._run_crowded[new] = 0
         self._run_len = np.where(hit, self._run_len + 1, 0)
+        self._run_crowded = np.where(hit, self._run_crowded + (hit & self._crowd), 0)
         self._run_sums[hit] += self._sums[hit]
         sampled = hit & np.all(np.isfinite(self._strobe), axis=1)
         fill = sampled & np.all(np.isnan(self._run_first), axis=1)
@@ -162,6 +180,7 @@ class GliderMonitor:
         self._run_last[sampled] = self._strobe[sampled]
         self._run_latest[hit] = self._latest[hit]
         self._hit = np.zeros_like(hit)
+        self._crowd = np.zeros_like(hit)
         self._sums = np.zeros_like(self._sums)
         self._strobe = np.full_like(self._strobe, np.nan)
 
@@ -170,6 +189,7 @@ class GliderMonitor:
         p = np.asarray(chosen, dtype=np.intp)
         sums = self._run_sums[p].copy()
         age = self._run_len[p].copy()
+        crowded = self._run_crowded[p].copy()
         start = self._run_start[p].copy()
         first, last = self._run_first[p].copy(), self._run_last[p].copy()
         latest = self._latest[p] if include_current else self._run_latest[p]
@@ -177,6 +197,7 @@ class GliderMonitor:
             hit = self._hit[p]
             start = np.where(hit & (age == 0), self._period if self._period is not None else 0, start)
             age = age + hit
+            crowded = crowded + (hit & self._crowd[p])
             sums[hit] += self._sums[p][hit]
             sampled = hit & np.all(np.isfinite(self._strobe[p]), axis=1)
             last[sampled] = self._strobe[p][sampled]
@@ -186,6 +207,8 @@ class GliderMonitor:
         distance = np.linalg.norm(last - first, axis=1)          # NaN where never sampled
         t0 = self._t0 if self._t0 is not None else 0.0
         period = self.config.period
+        with np.errstate(invalid='ignore', divide='ignore'):
+            isolation = np.where(age > 0, 1.0 - crowded / np.maximum(age, 1), 1.0)
         return [BoundPair(
             i=int(self.pairs[pk, 0]), j=int(self.pairs[pk, 1]),
             r=float(latest[k, 0]), theta=float(latest[k, 1]), phi=float(latest[k, 2]),
@@ -193,7 +216,8 @@ class GliderMonitor:
             glider_class=classify_configuration(float(phi_mean[k]), self.config.class_tolerance),
             start_period=int(start[k]), start_time=t0 + int(start[k]) * period,
             age_periods=int(age[k]), age=int(age[k]) * period,
-            is_glider=bool(age[k] >= self.config.min_periods), distance=float(distance[k]))
+            is_glider=bool(age[k] >= self.config.min_periods), distance=float(distance[k]),
+            isolation=float(isolation[k]), isolated=bool(isolation[k] >= self.config.isolated_fraction))
             for k, pk in enumerate(p)]
 
     def bound_pairs(self) -> tuple[BoundPair, ...]:

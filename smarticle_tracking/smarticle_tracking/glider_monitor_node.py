@@ -45,7 +45,8 @@ def glider_status(pair: BoundPair, body_length: float) -> DiagnosticStatus:
         'phi_mean_deg': f'{math.degrees(pair.phi_mean):.1f}',
         'age': f'{pair.age:.3f}', 'age_periods': str(pair.age_periods),
         'start_time': f'{pair.start_time:.3f}', 'is_glider': str(pair.is_glider).lower(),
-        'distance': f'{pair.distance:.5f}'}
+        'distance': f'{pair.distance:.5f}', 'isolation': f'{pair.isolation:.3f}',
+        'isolated': str(pair.isolated).lower()}
     return DiagnosticStatus(
         level=DiagnosticStatus.OK, name=f'glider {pair.i}-{pair.j}', hardware_id=f'smarticles {pair.i} {pair.j}',
         message=f'{pair.glider_class.value} bound {pair.age_periods} periods',

@@ -4,10 +4,16 @@ Definitions (also in docs/gliders.md):
 
 * **Periods.** Period ``q`` covers times ``[t0 + q T, t0 + (q + 1) T)``; ``t0`` is the gait start
   (default: the first frame). Frames before ``t0`` belong to no period and are ignored.
-* **Bound.** Pair (i, j) is bound in period q if, in at least one frame of q, the two robots touch
-  (optional ``contacts`` input) or their centre distance r is below ``r_bind``. A frame where either
-  robot is unseen (NaN pose) gives no r, so it can only bind through ``contacts``. A period with no
-  frames at all is unbound.
+* **Bound (the one rule).** Pair (i, j) is bound in period q if, in at least one frame of q, their
+  centre distance r is below ``r_bind`` (default ``R_BIND_BL`` = 1.6 BL, from the poses alone). The
+  batch analysis, the live monitor, ``smarticle-bag analyze`` and the experiments all use this rule
+  on poses; the optional ``contacts`` input (touching counts as bound too) is a diagnostic that no
+  shipped analysis uses. A frame where either robot is unseen (NaN pose) gives no r. A period with
+  no frames at all is unbound.
+* **Isolated.** A glider's ``isolation`` is the fraction of its bound periods in which no third
+  robot's centre comes within ``isolation_distance`` (default 2 W) of either glider robot's centre in
+  any seen frame of the period; the glider is **isolated** (a pair, not part of a cluster or train)
+  if ``isolation >= isolated_fraction`` (default 0.9). With two robots every glider is isolated.
 * **Glider.** A run of at least ``min_periods`` (K) consecutive bound periods. Its lifetime is the run
   length (periods, and seconds = periods x T); ``ongoing`` marks a run still bound in the last
   period of the data (its lifetime is then a lower bound).
@@ -42,15 +48,16 @@ from .errors import GliderConfigError, GliderInputError, MsdFitError
 from .msd import MsdResult, default_max_lag, fit_msd_exponent, msd
 from smarticle_common.pairs import (BODY_LENGTH, PairCoordinates, angular_distance, as_pose_array, circular_mean,
                     pair_centres, pair_coordinates, pair_indices)
-from smarticle_common.facts import GAIT_PERIOD
+from smarticle_common.facts import GAIT_PERIOD, R_BIND_BL
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
 BoolArray = NDArray[np.bool_]
 
-#: Default bind distance: 2 BL (10.8 cm) between body centres, about where an arm (5 cm, hinged at the
-#: body end 2.7 cm from the centre) of one robot can still reach the other robot.
-DEFAULT_R_BIND = 2.0 * BODY_LENGTH
+#: Default bind distance: ``R_BIND_BL`` = 1.6 BL (8.6 cm) between body centres (the one bound rule).
+DEFAULT_R_BIND = R_BIND_BL * BODY_LENGTH
+#: Default isolation distance: no third robot's centre within 2 W of either glider robot's centre.
+DEFAULT_ISOLATION_DISTANCE = 2.0 * BODY_LENGTH
 #: Per-frame sums accumulated per period, in this order along the last axis.
 SUM_FIELDS: tuple[str, ...] = ('count', 'r', 'phi_cos', 'phi_sin', 'theta_cos', 'theta_sin')
 _PERIOD_EPS = 1e-9
@@ -77,14 +84,19 @@ class GliderConfig:
     msd_min_lag: int = 1
     msd_max_lag: int | None = None
     msd_subtract_mean: bool = False
+    isolation_distance: float = DEFAULT_ISOLATION_DISTANCE
+    isolated_fraction: float = 0.9
 
     def __post_init__(self) -> None:
-        for name in ('period', 'r_bind', 'body_length', 'width'):
+        for name in ('period', 'r_bind', 'body_length', 'width', 'isolation_distance'):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0.0):
                 raise GliderConfigError(f'{name} must be a positive finite number, got {value!r}')
         if not _is_count(self.min_periods) or self.min_periods < 1:
             raise GliderConfigError(f'min_periods (K) must be a whole number >= 1, got {self.min_periods!r}')
+        frac = self.isolated_fraction
+        if not (isinstance(frac, (int, float)) and 0.0 <= frac <= 1.0):
+            raise GliderConfigError(f'isolated_fraction must be in [0, 1], got {frac!r}')
         tol = self.class_tolerance
         if not (isinstance(tol, (int, float)) and 0.0 < tol <= math.pi / 2):
             raise GliderConfigError(f'class_tolerance must be in (0, pi/2] rad so C1 and C2 cannot '
@@ -210,6 +222,8 @@ class Glider:
     v_com: float                   # m/s, mean per-period centre-of-mass speed
     net_speed: float               # m/s, distance / time between first and last seen samples
     beta: float                    # MSD exponent, NaN if the run is too short to fit
+    isolation: float               # fraction of its periods with no third robot within isolation_distance
+    isolated: bool                 # isolation >= config.isolated_fraction: a pair, not part of a cluster
     com_path: FloatArray = field(repr=False)   # (lifetime_periods, 2) per-period samples, NaN unseen
     msd: MsdResult = field(repr=False)
 
@@ -313,9 +327,36 @@ def _fit_beta(result: MsdResult, config: GliderConfig) -> float:
         return math.nan
 
 
+def isolation_fraction(times: FloatArray, poses: FloatArray, i: int, j: int, start: int, stop: int,
+                       t0: float, config: GliderConfig) -> float:
+    """Fraction of periods ``[start, stop)`` in which no third robot comes within the isolation distance.
+
+    A third robot is near in a period if, in any frame of it where both are seen, its centre lies within
+    ``config.isolation_distance`` of robot i's or robot j's centre. 1.0 when there is no third robot.
+    """
+    n = poses.shape[1]
+    others = np.array([k for k in range(n) if k not in (i, j)], dtype=np.intp)
+    if others.size == 0 or stop <= start:
+        return 1.0
+    q = period_index(times, t0, config.period)
+    in_run = (q >= start) & (q < stop)
+    xy = poses[in_run][:, :, :2]
+    with np.errstate(invalid='ignore'):
+        d_i = np.linalg.norm(xy[:, others] - xy[:, i:i + 1], axis=2)
+        d_j = np.linalg.norm(xy[:, others] - xy[:, j:j + 1], axis=2)
+        near_frame = np.any((d_i < config.isolation_distance) | (d_j < config.isolation_distance), axis=1)
+    crowded = np.zeros(stop - start, dtype=bool)
+    np.logical_or.at(crowded, q[in_run] - start, near_frame)
+    return float(1.0 - crowded.mean())
+
+
 def measure_run(table: PeriodTable, pairs: IntArray, pair: int, start: int, stop: int,
-                config: GliderConfig) -> Glider:
-    """Measure one run of bound periods ``[start, stop)`` of pair index ``pair``."""
+                config: GliderConfig, times: FloatArray | None = None, poses: FloatArray | None = None,
+                t0: float = 0.0) -> Glider:
+    """Measure one run of bound periods ``[start, stop)`` of pair index ``pair``.
+
+    ``times`` and ``poses`` (all robots) give the isolation; without them the glider counts as isolated.
+    """
     means = stretch_means(table.sums[start:stop, pair].sum(axis=0))
     path = table.strobe[start:stop, pair].copy()
     stats = path_stats(path, config.period)
@@ -323,15 +364,19 @@ def measure_run(table: PeriodTable, pairs: IntArray, pair: int, start: int, stop
     result = msd(path, max_lag=min(max_lag, max(len(path) - 1, 1)),
                  subtract_mean=config.msd_subtract_mean)
     phi_mean = float(means.phi)
+    i, j = int(pairs[pair, 0]), int(pairs[pair, 1])
+    isolation = 1.0 if times is None or poses is None else \
+        isolation_fraction(times, poses, i, j, start, stop, t0, config)
     return Glider(
-        i=int(pairs[pair, 0]), j=int(pairs[pair, 1]), pair_index=int(pair),
+        i=i, j=j, pair_index=int(pair),
         start_period=int(start), lifetime_periods=int(stop - start),
         start_time=float(table.start_times[start]), lifetime=float((stop - start) * config.period),
         ongoing=bool(stop == table.bound.shape[0]),
         glider_class=classify_configuration(phi_mean, config.class_tolerance),
         r_mean=float(means.r), theta_mean=float(means.theta), phi_mean=phi_mean,
         distance=stats.distance, path_length=stats.path_length, v_com=stats.v_com,
-        net_speed=stats.net_speed, beta=_fit_beta(result, config), com_path=path, msd=result)
+        net_speed=stats.net_speed, beta=_fit_beta(result, config), isolation=isolation,
+        isolated=bool(isolation >= config.isolated_fraction), com_path=path, msd=result)
 
 
 def analyse_gliders(times: ArrayLike, poses: ArrayLike, config: GliderConfig | None = None,
@@ -354,7 +399,8 @@ def analyse_gliders(times: ArrayLike, poses: ArrayLike, config: GliderConfig | N
     runs = bound_runs(table.bound)
     chosen = np.flatnonzero((runs.stop - runs.start) >= cfg.min_periods)
     chosen = chosen[np.lexsort((runs.pair[chosen], runs.start[chosen]))]   # by start, then pair
-    gliders = tuple(measure_run(table, pairs, int(runs.pair[k]), int(runs.start[k]), int(runs.stop[k]), cfg)
+    gliders = tuple(measure_run(table, pairs, int(runs.pair[k]), int(runs.start[k]), int(runs.stop[k]), cfg,
+                                t, arr, start)
                     for k in chosen)
     return GliderAnalysis(cfg, start, t, arr, coords, table, gliders)
 
@@ -373,7 +419,8 @@ TABLE_COLUMNS: tuple[tuple[str, str, str], ...] = (
     ('i', 'i', '{:d}'), ('j', 'j', '{:d}'), ('class', 'class', '{}'),
     ('start_s', 'start [s]', '{:.1f}'), ('start_period', 'start [T]', '{:d}'),
     ('lifetime_periods', 'life [T]', '{:d}'), ('lifetime_s', 'life [s]', '{:.1f}'),
-    ('ongoing', 'ongoing', '{}'), ('phi_deg', 'phi [deg]', '{:.0f}'), ('r_bl', 'r [BL]', '{:.2f}'),
+    ('ongoing', 'ongoing', '{}'), ('isolated', 'isolated', '{}'), ('phi_deg', 'phi [deg]', '{:.0f}'),
+    ('r_bl', 'r [BL]', '{:.2f}'),
     ('distance_w', 'dist [W]', '{:.2f}'), ('path_w', 'path [W]', '{:.2f}'),
     ('beta', 'beta', '{:.2f}'), ('v_com_mm_s', 'V_com [mm/s]', '{:.2f}'),
 )
@@ -387,6 +434,7 @@ def glider_table(gliders: Sequence[Glider], config: GliderConfig | None = None,
         'i': g.i, 'j': g.j, 'class': g.glider_class.value,
         'start_s': g.start_time, 'start_period': g.start_period,
         'lifetime_periods': g.lifetime_periods, 'lifetime_s': g.lifetime, 'ongoing': g.ongoing,
+        'isolated': g.isolated, 'isolation': g.isolation,
         'phi_deg': math.degrees(g.phi_mean), 'r_bl': g.r_mean / cfg.body_length,
         'distance_w': g.distance / cfg.width, 'path_w': g.path_length / cfg.width,
         'beta': g.beta, 'v_com_mm_s': 1e3 * g.v_com,

@@ -15,7 +15,7 @@ from typing import Any
 from smarticle_common.params import ParamSpec, defaults_yaml
 
 from .homography import Calibration, load_calibration
-from .gliders import GliderConfig
+from .gliders import DEFAULT_ISOLATION_DISTANCE, DEFAULT_R_BIND, GliderConfig
 from .markers import RobotDims
 from smarticle_common.pairs import BODY_LENGTH
 from .tracker import TrackerConfig
@@ -47,9 +47,13 @@ TRACKER_PARAMS: tuple[ParamSpec, ...] = (
 
 MONITOR_PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec('period', GAIT_PERIOD, 'gait period T (s)', 0.01, 3600.0),
-    ParamSpec('r_bind', 2.0 * BODY_LENGTH, 'a pair is bound in a period if its centre distance falls below '
-              'this (m)', 1e-4, 10.0),
+    ParamSpec('r_bind', DEFAULT_R_BIND, 'a pair is bound in a period if its centre distance falls below '
+              'this (m) in any frame of it (the one bound rule, docs/gliders.md)', 1e-4, 10.0),
     ParamSpec('min_periods', 30, 'K: bound periods in a row that make a glider', 1, 100000),
+    ParamSpec('isolation_distance', DEFAULT_ISOLATION_DISTANCE, 'a glider period is crowded if a third robot '
+              'comes within this of either glider robot (m)', 1e-4, 10.0),
+    ParamSpec('isolated_fraction', 0.9, 'a glider is isolated (a pair, not a cluster) if at least this '
+              'fraction of its periods is not crowded', 0.0, 1.0),
     ParamSpec('class_tolerance_deg', 45.0, 'C1 if the mean phi is within this of 180 deg, C2 of 0 deg',
               0.1, 90.0),
     ParamSpec('body_length', BODY_LENGTH, 'BL = W (m): the unit of r_bl in the reports', 1e-4, 10.0),
@@ -108,6 +112,8 @@ class MonitorSettings:
 def monitor_settings(values: dict[str, Any]) -> MonitorSettings:
     """MonitorSettings from checked MONITOR_PARAMS values (GliderConfigError names the problem)."""
     glider = GliderConfig(period=values['period'], r_bind=values['r_bind'], min_periods=values['min_periods'],
+                          isolation_distance=values['isolation_distance'],
+                          isolated_fraction=values['isolated_fraction'],
                           class_tolerance=math.radians(values['class_tolerance_deg']),
                           body_length=values['body_length'], width=values['body_length'])
     dims = RobotDims(values['body_width'], values['body_depth'], values['arm_length'], values['arm_thickness'])

@@ -54,7 +54,7 @@ def test_a_tiny_experiment_runs_end_to_end_resumes_and_repeats(tmp_path: Path,
     assert rec['code']['commit'] and rec['code']['pybullet'] and rec['code']['numpy']
     assert rec['result']['periods_run'] == pytest.approx(2.0)
     report = (first / 'tiny' / 'report-tiny' / 'report.md').read_text()
-    assert '| P1 trials with a pair bound >= 2 periods |' in report and 'Wilson' in report
+    assert '| P1 trials with an isolated pair bound >= 2 periods' in report and 'Wilson' in report
     assert (first / 'tiny' / 'report-tiny' / 'trajectories.png').stat().st_size > 0
     mtimes = {p: p.stat().st_mtime_ns for p in (first / 'tiny' / 'trials').glob('*.json')}
     capsys.readouterr()

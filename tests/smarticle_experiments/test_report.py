@@ -45,7 +45,9 @@ def test_p1_report_puts_the_paper_inside_the_sims_intervals_and_lists_what_it_le
                  'error_kind': 'trial', 'error': 'RuntimeError: boom', 'traceback': 'Traceback ...'})
     report = write_report(spec, trials + [], store, CODE).read_text()
     rows = {line.split(' | ')[0].lstrip('| '): line for line in report.splitlines() if line.startswith('| P')}
-    fraction = rows['P1 trials with a pair bound >= 100 periods']
+    fraction = rows['P1 trials with an isolated pair bound >= 100 periods (no third robot within 2 W in >= 90 % '
+                    'of its periods)']
+    assert '(97/151)' in rows['P1 same, any bound pair (clusters and trains included)']
     assert '64.2% [56.3%, 71.4%] (97/151)' in fraction and '| Wilson |' in fraction and '| yes |' in fraction
     assert '| yes |' in rows['P1 distance travelled by those gliders (W)']
     assert '| yes |' in rows['P2 both modes present']

@@ -4,14 +4,11 @@ other packages, which live in trials.py only); the isolation rule of gliders."""
 from __future__ import annotations
 
 import json
-import math
-from types import SimpleNamespace
 
-import numpy as np
 import pytest
 
 from smarticle_experiments.spec import apply_point
-from smarticle_experiments.trials import KINDS, isolated
+from smarticle_experiments.trials import KINDS
 
 
 def params(kind: str, **changes: object) -> dict:
@@ -52,15 +49,8 @@ def test_the_seed_jitters_the_pair_start_only_when_asked() -> None:
     assert abs(a[0] - 1.3) <= 0.04 and abs(a[1]) <= 4.0 and abs(a[2] - 180.0) <= 4.0
 
 
-def test_isolated_means_no_third_robot_within_the_limit_during_the_bound_periods() -> None:
-    times = np.arange(0.0, 4.0, 0.5)                       # period 1 s: periods 0..3, two frames each
-    poses = np.zeros((times.size, 3, 3))
-    poses[:, 1, 0] = 0.06                                  # robots 0 and 1 side by side
-    poses[:, 2, 0] = 1.0                                   # robot 2 far away ...
-    poses[6:, 2, 0] = 0.1                                  # ... until period 3
-    glider = SimpleNamespace(i=0, j=1, start_period=0, lifetime_periods=3)
-    assert isolated(times, poses, glider, 1.0, 0.108)      # periods 0-2: alone
-    longer = SimpleNamespace(i=0, j=1, start_period=0, lifetime_periods=4)
-    assert not isolated(times, poses, longer, 1.0, 0.108)  # period 3: robot 2 within 2 W of robot 1
-    assert isolated(times, poses[:, :2], longer, 1.0, 0.108)   # no third robot at all
-    assert math.isfinite(poses.sum())
+def test_a_dense_trial_reports_isolation_from_the_glider_analysis() -> None:
+    result = KINDS['dense'].function(params('dense', robots=3, periods=4.0, min_periods=1), 2)
+    for g in result['gliders']:
+        assert 0.0 <= g['isolation'] <= 1.0
+        assert g['isolated'] == (g['isolation'] >= 0.9)

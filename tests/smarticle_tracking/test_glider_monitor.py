@@ -62,6 +62,9 @@ def test_streaming_finds_the_same_gliders_as_batch(seed: int) -> None:
         assert b.is_glider
         assert b.phi_mean == pytest.approx(g.phi_mean, abs=1e-9)
         assert b.distance == pytest.approx(g.distance, abs=1e-12)
+        assert b.isolation == pytest.approx(g.isolation, abs=1e-12)
+        assert b.isolated is g.isolated
+    assert len({round(g.isolation, 6) for g in batch.gliders}) > 1   # jostling robots crowd some periods
 
 
 def test_bound_set_after_each_period_matches_the_batch_table() -> None:

@@ -250,3 +250,39 @@ def test_performance_smoke_twenty_thousand_frames_seven_robots() -> None:
     assert analysis.periods.bound.shape == (625, 21)
     for g in analysis.gliders:
         assert g.lifetime_periods >= 30 and math.isfinite(g.r_mean)
+
+
+def test_a_third_robot_near_the_pair_crowds_exactly_the_periods_it_visits() -> None:
+    times, poses = pair_scene(periods(50, 0, 50))                # bound all 50 periods
+    visit = (times >= 10 * PERIOD) & (times < 13 * PERIOD)        # periods 10, 11, 12
+    poses[visit, 2, :2] = poses[visit, 0, :2] + [0.0, -0.10]      # 10 cm from robot 0: within 2 W
+    (g,) = analyse_gliders(times, poses, config(30)).gliders
+    assert g.isolation == pytest.approx(47 / 50)
+    assert g.isolated                                              # 0.94 >= 0.9
+    (g,) = analyse_gliders(times, poses, config(30, isolated_fraction=0.95)).gliders
+    assert not g.isolated
+    poses[visit, 2, :2] = poses[visit, 0, :2] + [0.0, -0.12]      # 12 cm > 2 W = 10.8 cm: not near
+    (g,) = analyse_gliders(times, poses, config(30)).gliders
+    assert g.isolation == 1.0
+
+
+def test_a_pair_inside_a_cluster_is_not_isolated_and_the_table_says_so() -> None:
+    times, poses = pair_scene(periods(40, 0, 40))
+    poses[:, 2, :2] = poses[:, 1, :2] + [0.0, 0.09]               # a third robot rides along
+    gliders = analyse_gliders(times, poses, config(30)).gliders
+    pair = [g for g in gliders if (g.i, g.j) == (0, 1)][0]
+    assert pair.isolation == 0.0 and not pair.isolated
+    rows = {(r['i'], r['j']): r for r in glider_table(gliders)}
+    assert rows[(0, 1)]['isolated'] is False
+    assert 'isolated' in format_glider_table(glider_table(gliders)).splitlines()[0]
+
+
+def test_the_one_bound_rule_is_r_under_1_6_bl_in_any_frame() -> None:
+    from smarticle_common.facts import BODY_LENGTH, R_BIND_BL
+    assert GliderConfig().r_bind == pytest.approx(R_BIND_BL * BODY_LENGTH)
+    times, poses = pair_scene(periods(40, 0, 0))
+    close = np.arange(0, times.size, FRAMES_PER_PERIOD) + 5
+    poses[close, 1, :2] = poses[close, 0, :2] + [0.0, 0.99 * R_BIND_BL * BODY_LENGTH]
+    assert analyse_gliders(times, poses, config(40)).periods.bound[:, 0].all()
+    poses[close, 1, :2] = poses[close, 0, :2] + [0.0, 1.01 * R_BIND_BL * BODY_LENGTH]
+    assert not analyse_gliders(times, poses, config(40)).periods.bound[:, 0].any()

@@ -20,7 +20,7 @@ def test_defaults_build_valid_configs() -> None:
     tracker = tracker_config({s.name: s.default for s in TRACKER_PARAMS})
     assert tracker.tag_ids == tuple(range(7))
     monitor = monitor_settings({s.name: s.default for s in MONITOR_PARAMS})
-    assert monitor.t0 is None and monitor.glider.r_bind == pytest.approx(0.108)
+    assert monitor.t0 is None and monitor.glider.r_bind == pytest.approx(1.6 * 0.054)
     assert parse_tag_ids('3, 4 5') == (3, 4, 5)
     with pytest.raises(SettingsError, match='tag_ids'):
         parse_tag_ids('1 two')
