@@ -44,14 +44,23 @@ OUT = Path('out/physics')
 BL = 0.054
 CHRONO_SPEED = math.pi / 0.4   # rad/s: the authors' motors turn pi rad per 0.4 s quarter
 
-#: Named settings. 'default' = the shipped defaults. 'authors' = the authors' Chrono model as far as
+#: The defaults shipped until the study (1/240 s, arm-arm friction 1.5, restitution 0, per-step servo gain
+#: 0.3, 0.15 N m, 3.5 g arms): every model below is written on top of them, so the study's tables stay
+#: reproducible after the defaults changed. 'default' in the study's tables is this set.
+OLD_DEFAULT: dict[str, Any] = {
+    'time_step': 1.0 / 240, 'friction_arm_arm': 1.5, 'friction_robot_robot': 0.3, 'friction_body_plate': 0.35,
+    'restitution': 0.0, 'restitution_body_plate': None, 'restitution_velocity_threshold': None,
+    'servo_bandwidth': None, 'position_gain': 0.3, 'tilt_inertia_scale': 1.0, 'arm_mass': 0.0035,
+    'servo_torque': 0.15}
+
+#: Named settings. 'default' = the defaults shipped until the study. 'authors' = the authors' Chrono model as far as
 #: PyBullet can take it: friction 0.3 on every pair (body-plate 0.3), restitution 0.85 between robots,
 #: rigid speed-driven motors (position gain 1: the arm reaches its target in one step at full speed,
 #: torque limit far above any contact load), Chrono speed pi rad / 0.4 s, 24.8 g body (arms 5 g each).
 MODELS: dict[str, dict[str, Any]] = {
-    'default': {},
-    'rigid': {'position_gain': 1.0, 'servo_torque': 10.0},
-    'authors': {'friction_arm_arm': None, 'friction_robot_robot': 0.3, 'friction_body_plate': 0.3,
+    'default': dict(OLD_DEFAULT),
+    'rigid': {**OLD_DEFAULT, 'position_gain': 1.0, 'servo_torque': 10.0},
+    'authors': {**OLD_DEFAULT, 'friction_arm_arm': None, 'friction_robot_robot': 0.3, 'friction_body_plate': 0.3,
                 'restitution': 0.85, 'restitution_body_plate': 0.0, 'restitution_velocity_threshold': 0.01,
                 'position_gain': 1.0, 'servo_torque': 10.0, 'arm_mass': 0.005, 'gait_speed': CHRONO_SPEED},
 }
@@ -62,9 +71,11 @@ MODELS['candidate'] = {**MODELS['authors'], 'servo_bandwidth': 72.0}
 #: dense in-phase clusters otherwise (docs/physics_study.md, section C).
 MODELS['flat'] = {**MODELS['candidate'], 'tilt_inertia_scale': 100.0}
 #: The proposed default (docs/sim_calibration.md): flat robots, a 0.05 N m servo of bandwidth 200 /s at 1/480 s.
+#: It is what ``SimConfig()`` ships now; 'shipped' checks that (the same settings, all from the defaults).
 #: The gait runs at the servo's top speed as the SPEC says (the authors' Chrono speed is dropped).
 MODELS['proposed'] = {**{k: v for k, v in MODELS['flat'].items() if k != 'gait_speed'},
                       'servo_torque': 0.05, 'servo_bandwidth': 200.0, 'time_step': 1.0 / 480}
+MODELS['shipped'] = {}
 #: The proposed model with compliant contacts (Bullet contact stiffness and damping on robot links, no
 #: restitution impulse), closer to a smooth-contact (penalty) model: e = 0.85 for a 30 g pair at k 2000 N/m.
 MODELS['proposed soft'] = {**MODELS['proposed'], 'restitution': 0.0, 'x_contact_stiffness': 2000.0,
@@ -331,17 +342,17 @@ MECH_STARTS = [(th, ph) for th in (120, 150, 210, 240) for ph in (0, 180)] + \
     [(th, ph) for th in (30, 60, 300, 330) for ph in (0, 180)]
 
 VARIANTS: dict[str, dict[str, Any]] = {
-    'default': {},
-    'rigid motor': {'position_gain': 1.0, 'servo_torque': 10.0},
-    'chrono speed': {'gait_speed': CHRONO_SPEED},
-    'restitution 0.85 (robots, rvt 0.01)': {'restitution': 0.85, 'x_plate_restitution': 0.0, 'x_rvt': 0.01},
-    'arm-arm friction 0.3': {'friction_arm_arm': None},
-    'body 24.8 g': {'arm_mass': 0.005},
-    'split impulse': {'x_split_impulse': 1, 'x_split_threshold': -0.0001},
-    'contact ERP 0.2': {'contact_erp': 0.2},
-    'dt 1/960': {'time_step': 1 / 960},
+    'default': dict(OLD_DEFAULT),
+    'rigid motor': {**OLD_DEFAULT, 'position_gain': 1.0, 'servo_torque': 10.0},
+    'chrono speed': {**OLD_DEFAULT, 'gait_speed': CHRONO_SPEED},
+    'restitution 0.85 (robots, rvt 0.01)': {**OLD_DEFAULT, 'restitution': 0.85, 'x_plate_restitution': 0.0, 'x_rvt': 0.01},
+    'arm-arm friction 0.3': {**OLD_DEFAULT, 'friction_arm_arm': None},
+    'body 24.8 g': {**OLD_DEFAULT, 'arm_mass': 0.005},
+    'split impulse': {**OLD_DEFAULT, 'x_split_impulse': 1, 'x_split_threshold': -0.0001},
+    'contact ERP 0.2': {**OLD_DEFAULT, 'contact_erp': 0.2},
+    'dt 1/960': {**OLD_DEFAULT, 'time_step': 1 / 960},
     'authors': MODELS['authors'],
-    'restitution 0.85 (robots, Bullet rvt 0.2)': {'restitution': 0.85, 'restitution_body_plate': 0.0},
+    'restitution 0.85 (robots, Bullet rvt 0.2)': {**OLD_DEFAULT, 'restitution': 0.85, 'restitution_body_plate': 0.0},
     'candidate': {**MODELS['authors'], 'servo_bandwidth': 72.0},
     'authors + arm-arm friction 1.5': {**MODELS['authors'], 'friction_arm_arm': 1.5},
 }
@@ -352,7 +363,7 @@ for _it in (5, 10, 20, 50):     # solver iterations at the candidate step, robot
                                            'time_step': 1.0 / 480, 'solver_iterations': _it}
 for _inv in (480, 960, 1920):   # the candidate's binding outcome against the time step
     VARIANTS[f'candidate dt 1/{_inv}'] = {**MODELS['candidate'], 'time_step': 1.0 / _inv}
-    VARIANTS[f'default dt 1/{_inv}'] = {'time_step': 1.0 / _inv}
+    VARIANTS[f'default dt 1/{_inv}'] = {**OLD_DEFAULT, 'time_step': 1.0 / _inv}
 
 
 def summarise_trace(trace: dict[str, Any], period: float) -> dict[str, Any]:

@@ -7,6 +7,7 @@ themselves (``RobotSpec``, the presets ``SMALL`` and ``FEEDBACK``) are facts of 
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
@@ -16,52 +17,70 @@ from smarticle_common.facts import SMALL, RobotSpec, require_non_negative, requi
 from .errors import ConfigError
 
 
+class NotConvergedWarning(UserWarning):
+    """A setting the simulation accepts but whose results are not converged in the time step."""
+
+
 @dataclass(frozen=True)
 class PhysicsConfig:
-    """PyBullet settings: stepping, solver, contact and servo-loop knobs, trouble bounds."""
+    """PyBullet settings: stepping, solver, contact and servo-loop knobs, trouble bounds.
 
-    time_step: float = 1.0 / 240.0
+    The defaults are the converged, stable model of docs/sim_calibration.md: the paper authors' contact
+    values (friction 0.3 on every pair, restitution 0.85 between robots and none on the plate), a servo
+    of fixed bandwidth, robots that stay flat, at the knee of run time against error (1/480 s). Each
+    value that departs from a measured or published one says why below, with the figure behind it.
+    """
+
+    #: 1/480 s: the knee of run time against error. Drift 4 % and pair r 1-3 % from their time-step limits,
+    #: overlaps 0.8 mm; 1/240 s is 11 % off and lets an arm tip (0.5 m/s) travel 2.2 mm of a 3 mm arm per
+    #: step (docs/physics_study.md section B, docs/sim_calibration.md).
+    time_step: float = 1.0 / 480.0
     control_tick: float = 1.0 / 60.0            # must be a whole number of time steps
+    #: 10: the drift is within 5 % of 50 iterations; 20 / 50 cost 1.6x / 1.9x in dense runs (study, B).
     solver_iterations: int = 10
     contact_breaking_threshold: float = 0.002   # m; Bullet's default 0.02 is far larger than the robots' gaps
     gravity: float = 9.81
-    friction_body_plate: float = 0.35           # body on aluminium
-    friction_robot_robot: float = 0.30          # printed plastic on plastic (arm-body; all pairs if the next is None)
-    #: Arm-arm friction. None: every robot-robot pair uses friction_robot_robot. A number: arm-arm uses it,
-    #: arm-body keeps friction_robot_robot, and body-body becomes friction_robot_robot**2 / friction_arm_arm
-    #: (Bullet multiplies the two links' coefficients, so three pairs have only two free values). The high
-    #: default stands in for the arm edges and horns that hook on the real robots (flat boxes here): it is
-    #: what makes a C1 pair hold together near phi = 180 deg and glide (docs/sim_calibration.md, fourth pass).
-    friction_arm_arm: float | None = 1.5
-    restitution: float = 0.0
-    position_gain: float = 0.3                  # servo loop: velocity = gain * error / time_step, clamped
+    friction_body_plate: float = 0.30           # the authors' Chrono model (0.3-0.37)
+    friction_robot_robot: float = 0.30          # the authors' Chrono model: every robot-robot pair
+    #: Arm-arm friction. None: every robot-robot pair uses friction_robot_robot (the default, as in the
+    #: authors' model). A number: arm-arm uses it, arm-body keeps friction_robot_robot, and body-body
+    #: becomes friction_robot_robot**2 / friction_arm_arm (Bullet multiplies the two links' values). The
+    #: old 1.5 "hook" took back 35 % of every push and kept every pair bound (docs/physics_study.md, A).
+    friction_arm_arm: float | None = None
+    #: Robot-robot restitution: 0.85, the authors' value (0.85-0.9). It is what makes collisions repel:
+    #: 4 ms kicks leaving the pair separating at 0.2-0.6 m/s instead of pushes that end at rest (study, A).
+    restitution: float = 0.85
+    position_gain: float = 0.3                  # servo loop gain per step, used only if servo_bandwidth is None
     plate_size: float = 0.60                    # square plate side (m), centred on the origin
     plate_thickness: float = 0.01
     arm_plate_collision: bool = False           # arms have clearance; the pair is filtered out
     max_tilt: float = math.radians(25.0)        # trouble: body z axis tilted beyond this
     max_speed: float = 2.0                      # trouble: body speed (m/s)
-    #: Bullet's contact error reduction: the fraction of an overlap pushed out per step. With Bullet's
-    #: default (0.2) servo-driven arms wedge 4-12 mm into dense clusters for up to 0.7 s; 0.6 keeps the 99th
-    #: percentile of the deepest overlap near 1 mm (docs/sim_calibration.md, fourth pass).
+    #: Bullet's contact error reduction: the fraction of an overlap pushed out per step. 0.2 (Bullet's
+    #: default) binds more and tips robots as well; no evidence for another value (study, C).
     contact_erp: float = 0.6
     max_penetration: float = 0.004              # trouble: contact overlap (m) ...
     penetration_checks: int = 3                 # ... at this many trouble checks in a row (a spike is not a tunnel)
     trouble_every: int = 6                      # check for trouble every n control ticks
-    # --- issue #11 knobs (docs/physics_study.md); each default keeps the behaviour above unchanged ---
-    #: Servo loop bandwidth (1/s). None: the loop gain is ``position_gain`` per step, so the servo's final
-    #: approach (time constant time_step / position_gain) shrinks with the step. A number: the gain per step
-    #: is min(1, servo_bandwidth * time_step), the same approach at every step (0.3 / (1/240 s) = 72 /s).
-    servo_bandwidth: float | None = None
-    #: Bullet's restitutionVelocityThreshold (m/s): contacts approaching slower get no restitution. None:
-    #: Bullet's default (0.2 m/s); most arm impacts here are faster, so restitution acts either way.
-    restitution_velocity_threshold: float | None = None
-    #: Body-plate restitution. None: the same as ``restitution`` (robot-robot).
-    restitution_body_plate: float | None = None
-    #: Bullet's continuous collision detection: swept-sphere radius (m) on every robot link; 0 = off.
+    #: Servo loop bandwidth (1/s): the gain per step is min(1, servo_bandwidth * time_step), so the servo's
+    #: final approach (time constant 1 / bandwidth, 5 ms) is the same at every step and the drift converges.
+    #: 200 /s puts the converged single-robot drift at 145-154 um per cycle (P7: 40-150 um); 72 /s gives
+    #: 220 um, 300 /s 116 um but needs 1/960 s to converge (docs/sim_calibration.md, P7). None: the old
+    #: per-step ``position_gain``, whose approach shrinks with the step (drift 86 -> 22 um, no limit).
+    servo_bandwidth: float | None = 200.0
+    #: Bullet's restitutionVelocityThreshold (m/s): contacts approaching slower get no restitution. 0.01:
+    #: the authors' model bounces every impact; 0.2 (Bullet's) gives the same binding (8 vs 8 of 22 starts).
+    restitution_velocity_threshold: float | None = 0.01
+    #: Body-plate restitution. 0: the bodies rest on the plate; 0.85 there makes robots hop and tip.
+    #: None: the same as ``restitution``.
+    restitution_body_plate: float | None = 0.0
+    #: Bullet's continuous collision detection: swept-sphere radius (m) on every robot link; 0 = off (no
+    #: tunnelling at 1/480 s: overlaps <= 1.3 mm in 7-robot runs, so it is not needed).
     ccd_swept_sphere_radius: float = 0.0
     #: Factor on the body's roll and pitch inertia (mass, yaw inertia and contacts unchanged): robots that
-    #: stay flat on the plate, as the real ones do. 1 = the box's own inertia.
-    tilt_inertia_scale: float = 1.0
+    #: stay flat on the plate, as the real ones do (the paper never mentions one tipping). With restitution
+    #: 0.85, jammed robots bounce between two contacts and roll over otherwise (study, C). 1 = the box's own.
+    tilt_inertia_scale: float = 100.0
 
     def __post_init__(self) -> None:
         require_positive(self, 'time_step', 'control_tick', 'plate_size', 'plate_thickness', 'max_tilt',
@@ -139,6 +158,30 @@ class SimConfig:
 
     robot: RobotSpec = SMALL
     physics: PhysicsConfig = field(default_factory=PhysicsConfig)
+
+    def __post_init__(self) -> None:
+        """Refuse settings that cannot converge for this robot; warn about ones that converge poorly."""
+        ph, spec = self.physics, self.robot
+        tip_travel = spec.servo_speed * (spec.arm_length) * ph.time_step     # arm tip per step at top speed
+        if tip_travel >= spec.arm_thickness:
+            raise ConfigError(f'PhysicsConfig.time_step: {ph.time_step:.6g} s lets an arm tip travel '
+                              f'{1e3 * tip_travel:.2f} mm per step, more than the arm is thick '
+                              f'({1e3 * spec.arm_thickness:.1f} mm): arms pass through each other; use at most '
+                              f'{spec.arm_thickness / (spec.servo_speed * spec.arm_length):.3g} s')
+        if 2.0 * tip_travel >= spec.arm_thickness:
+            warnings.warn(f'PhysicsConfig.time_step: {ph.time_step:.6g} s lets two approaching arm tips close '
+                          f'{2e3 * tip_travel:.2f} mm per step against a {1e3 * spec.arm_thickness:.1f} mm arm: '
+                          'arms wedge and the results are not converged (docs/sim_calibration.md)',
+                          NotConvergedWarning, stacklevel=3)
+        if ph.ccd_swept_sphere_radius > spec.arm_thickness / 2.0:
+            raise ConfigError(f'PhysicsConfig.ccd_swept_sphere_radius: {ph.ccd_swept_sphere_radius!r} m is larger '
+                              f'than half the arm thickness ({spec.arm_thickness / 2.0:.4g} m); the swept sphere '
+                              'must fit inside the arm')
+        if ph.servo_bandwidth is not None and ph.servo_bandwidth * ph.time_step > 0.5:
+            warnings.warn(f'PhysicsConfig.servo_bandwidth: {ph.servo_bandwidth:g} /s at a {ph.time_step:.6g} s step '
+                          f'is {ph.servo_bandwidth * ph.time_step:.2f} of the step; the servo converges only for '
+                          'bandwidth x time_step <= 0.5 (docs/sim_calibration.md)', NotConvergedWarning,
+                          stacklevel=3)
 
     @classmethod
     def from_preset(cls, preset: str = 'small', **physics: Any) -> SimConfig:

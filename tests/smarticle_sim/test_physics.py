@@ -229,9 +229,11 @@ def test_trouble_check_names_robot_time_quantity(config: SimConfig) -> None:
 
 
 def test_trouble_on_absurd_time_step(gait90: GaitConfig) -> None:
-    config = SimConfig().with_physics(time_step=0.1, control_tick=0.1, trouble_every=1)
+    # SimConfig refuses such a step (test_settings), so the fault is injected into Bullet after the build
+    config = SimConfig().with_physics(trouble_every=1)
     with Runner.with_gaits(config, dense_scene(config.robot, gait90, 7, seed=1)) as run:
         world = run.physics
+        world.client.setPhysicsEngineParameter(fixedTimeStep=0.1)
         run.gaits.start(0.0)
         with pytest.raises(SimTrouble):
             run.run(world.ticks_for(16.0))

@@ -18,11 +18,16 @@ def lone_robot() -> Scene:
     return Scene((RobotPlacement(0.0, 0.0, math.pi / 2),), name='lone')
 
 
-def test_defaults_keep_the_old_behaviour() -> None:
+def test_defaults_are_the_converged_model_of_the_calibration() -> None:
     ph = PhysicsConfig()
-    assert ph.servo_bandwidth is None and ph.servo_gain() == ph.position_gain
-    assert ph.restitution_velocity_threshold is None and ph.restitution_body_plate is None
-    assert ph.ccd_swept_sphere_radius == 0.0 and ph.tilt_inertia_scale == 1.0
+    assert ph.time_step == pytest.approx(1.0 / 480.0)
+    assert ph.servo_bandwidth == 200.0 and ph.servo_gain() == pytest.approx(200.0 / 480.0)
+    assert ph.restitution == 0.85 and ph.restitution_body_plate == 0.0
+    assert ph.restitution_velocity_threshold == 0.01
+    assert ph.friction_arm_arm is None and ph.friction_robot_robot == ph.friction_body_plate == 0.3
+    assert ph.ccd_swept_sphere_radius == 0.0 and ph.tilt_inertia_scale == 100.0
+    old = PhysicsConfig(servo_bandwidth=None)
+    assert old.servo_gain() == old.position_gain          # the per-step gain of the old servo loop
 
 
 def test_servo_bandwidth_fixes_the_approach_whatever_the_step() -> None:
@@ -45,7 +50,7 @@ def test_restitution_body_plate_above_one_refused() -> None:
 
 def test_bullet_gets_the_restitutions_and_the_tilt_inertia(config: SimConfig) -> None:
     """Bullet multiplies the links' restitutions: robot-robot 0.85, body-plate 0; roll / pitch inertia x 100."""
-    plain = config.with_physics(restitution=0.85)
+    plain = config.with_physics(restitution=0.85, tilt_inertia_scale=1.0)
     tuned = config.with_physics(restitution=0.85, restitution_body_plate=0.0, tilt_inertia_scale=100.0)
     with Runner.with_gaits(plain, lone_robot()) as run:
         world = run.physics

@@ -22,7 +22,7 @@ def test_bad_physics_values_refused(field: str, value: float) -> None:
 
 
 def test_control_tick_must_be_whole_steps() -> None:
-    assert PhysicsConfig().steps_per_tick == 4
+    assert PhysicsConfig().steps_per_tick == 8
     assert steps_per_tick(0.01, 0.001) == 10
     with pytest.raises(ValueError, match='control_tick'):
         PhysicsConfig(time_step=1 / 240, control_tick=0.01)
@@ -31,7 +31,7 @@ def test_control_tick_must_be_whole_steps() -> None:
 
 
 def test_from_preset_rejects_unknown_field() -> None:
-    assert SimConfig.from_preset('small', time_step=1 / 120, control_tick=1 / 60).physics.steps_per_tick == 2
+    assert SimConfig.from_preset('small', time_step=1 / 960, control_tick=1 / 60).physics.steps_per_tick == 16
     with pytest.raises(ConfigError, match='timestep'):
         SimConfig.from_preset('small', timestep=0.01)
 
@@ -48,3 +48,24 @@ def test_link_frictions_multiply_to_the_pair_values(arm_arm: float | None) -> No
 def test_unreachable_plate_friction_refused() -> None:
     with pytest.raises(ConfigError, match='friction_arm_arm'):
         PhysicsConfig(friction_robot_robot=0.01, friction_arm_arm=5.0)
+
+
+def test_a_step_that_lets_arms_pass_through_each_other_is_refused_with_the_field_named() -> None:
+    with pytest.raises(ConfigError, match=r'PhysicsConfig\.time_step: .* more than the arm is thick'):
+        SimConfig.from_preset('small', time_step=1 / 120, control_tick=1 / 60)
+    with pytest.raises(ConfigError, match=r'PhysicsConfig\.time_step'):
+        SimConfig.from_preset('small', time_step=0.1, control_tick=0.1)
+
+
+def test_a_coarse_step_or_a_fast_servo_is_warned_about() -> None:
+    from smarticle_sim.settings import NotConvergedWarning
+    with pytest.warns(NotConvergedWarning, match='PhysicsConfig.time_step'):
+        SimConfig.from_preset('small', time_step=1 / 240, control_tick=1 / 60)
+    with pytest.warns(NotConvergedWarning, match='PhysicsConfig.servo_bandwidth'):
+        SimConfig.from_preset('small', servo_bandwidth=600.0)
+
+
+def test_a_ccd_radius_larger_than_the_arm_is_refused() -> None:
+    with pytest.raises(ConfigError, match='ccd_swept_sphere_radius'):
+        SimConfig.from_preset('small', ccd_swept_sphere_radius=0.002)
+    assert SimConfig.from_preset('small', ccd_swept_sphere_radius=0.001).physics.ccd_swept_sphere_radius == 0.001
