@@ -29,7 +29,7 @@ def test_a_parallel_quadrant_2_start_is_kicked_out_of_reach(config: SimConfig, g
     touching = rec.contacts[:, 0, 1]
     touched = [bool(touching[q * per:(q + 1) * per].any()) for q in range(20)]
     assert touched[0] and not any(touched[10:]), touched      # one collision, then never again
-    r = np.array([one_pair(a, b)[0] / bl for a, b in zip(rec.poses[:, 0], rec.poses[:, 1])])
+    r = np.array([one_pair(a, b)[0] / bl for a, b in zip(rec.poses[:, 0], rec.poses[:, 1], strict=True)])
     assert r[2 * per] > 1.7, r[2 * per]                        # 1.3 -> 1.8 BL in the first period
     assert r[-1] > 1.7                                         # and it stays out there (friction stops it)
     speed = np.linalg.norm(np.diff(rec.poses[:, :, :2], axis=0), axis=2) / config.physics.control_tick
