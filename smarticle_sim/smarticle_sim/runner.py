@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
-from smarticle_common.gait import GaitConfig, SquareGait
+from smarticle_common.gait import GaitConfig, SquareGait, board_time
 
 from .errors import ConfigError
 from .noise import ServoDelays, clock_rates
@@ -182,10 +182,8 @@ class GaitController:
 
     def local_time(self, robot: int, t: float) -> float:
         """Robot ``robot``'s gait clock at sim time ``t`` (the sim time itself before a start)."""
-        gait, rate = self._gaits[robot], self.clock_rates[robot]
-        if rate == 1.0 or gait is None or gait.start_time is None:
-            return t
-        return gait.start_time + (t - gait.start_time) * rate
+        gait = self._gaits[robot]
+        return t if gait is None else board_time(t, gait.start_time, self.clock_rates[robot])
 
     def _sim_time(self, robot: int, local: float) -> float:
         """Sim time at which robot ``robot``'s gait clock reads ``local`` (after a start)."""
