@@ -151,7 +151,7 @@ class GaitController:
     """
 
     def __init__(self, physics: Physics, gaits: Sequence[GaitConfig | None],
-                 clock_rates: Sequence[float] | None = None, servo_jitter: float = 0.0, seed: int = 0) -> None:
+                 clock_rates: Sequence[float] | np.ndarray | None = None, servo_jitter: float = 0.0, seed: int = 0) -> None:
         n = len(gaits)
         if n != physics.n_robots:
             raise ValueError(f'GaitController: {n} gait configs for {physics.n_robots} robots')
@@ -184,6 +184,11 @@ class GaitController:
         """Robot ``robot``'s gait clock at sim time ``t`` (the sim time itself before a start)."""
         gait = self._gaits[robot]
         return t if gait is None else board_time(t, gait.start_time, self.clock_rates[robot])
+
+    def pending(self, robot: int) -> float | None:
+        """Sim time at which ``robot``'s delayed command goes out, or None if none is waiting."""
+        at = float(self._pending_at[self.physics.check_robot(robot)])
+        return None if math.isinf(at) else at
 
     def _sim_time(self, robot: int, local: float) -> float:
         """Sim time at which robot ``robot``'s gait clock reads ``local`` (after a start)."""
