@@ -151,7 +151,8 @@ class GaitController:
     """
 
     def __init__(self, physics: Physics, gaits: Sequence[GaitConfig | None],
-                 clock_rates: Sequence[float] | np.ndarray | None = None, servo_jitter: float = 0.0, seed: int = 0) -> None:
+                 clock_rates: Sequence[float] | np.ndarray | None = None, servo_jitter: float = 0.0,
+                 seed: int = 0) -> None:
         n = len(gaits)
         if n != physics.n_robots:
             raise ValueError(f'GaitController: {n} gait configs for {physics.n_robots} robots')
