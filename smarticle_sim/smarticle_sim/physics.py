@@ -10,6 +10,9 @@ the plate, and two arm boxes on revolute joints at the body's ends. Joint 0 is a
 -z) and joint 1 is arm 2 (at +x, axis +z), so each joint position *is* the gait's alpha_i. Arms hang
 ``arm_clearance`` above the plate and their collisions with the plate are filtered out.
 
+With ``NoiseConfig.friction_sd`` > 0 the physics owns the plate's friction field (``noise.FrictionField``)
+and sets each body's friction from it on ``update_plate_friction`` (the runner calls it once per tick).
+
 Per-tick Python work is kept small: motor commands are sent only when a target or speed changes, state
 is read with one pass of batched calls and cached until the next step, and FSR forces and contacts are
 computed only when asked for.
