@@ -193,6 +193,17 @@ class SquareGait:
         return (moved, self._pos0[1]) if arm == 0 else (self._pos0[0], moved)
 
 
+def board_time(t: float, start: float | None, rate: float) -> float:
+    """Reading at reference time ``t`` of a board clock running ``rate`` times as fast, set at ``start``.
+
+    A gait started at the shared time ``start`` on a board whose clock runs at ``rate`` (1 + relative
+    error) sees start + (t - start) * rate; before a start (``start`` None) and at rate 1 it sees ``t``.
+    """
+    if rate == 1.0 or start is None:
+        return t
+    return start + (t - start) * rate
+
+
 def open_loop_angles(config: GaitConfig, tau: float) -> tuple[float, float]:
     """Arm angles of an unhalted gait at gait time ``tau`` (periods), in closed form."""
     if not math.isfinite(tau) or tau < 0.0:

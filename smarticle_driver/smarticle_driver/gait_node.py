@@ -14,7 +14,7 @@ from rclpy.time import Time
 
 from smarticle_common import topics
 from smarticle_common.facts import GAIT_PERIOD, SERVO_SPEED
-from smarticle_common.gait import GaitCommand, GaitConfig, SquareGait
+from smarticle_common.gait import GaitCommand, GaitConfig, SquareGait, board_time
 from smarticle_common.node import read_config, resolve_robot_id, run_node
 from smarticle_common.params import ROBOT_ID_PARAM, ParameterError, ParamSpec
 
@@ -33,6 +33,10 @@ PARAMS: tuple[ParamSpec, ...] = (
               'without waiting for /smarticles/start; a start message with this stamp changes nothing '
               '(negative = wait for /smarticles/start). Lock-step runs set it so that the start cannot race '
               'the first /clock messages', -1.0, 1e7),
+    ParamSpec('clock_rate_offset', 0.0, "relative error of this gait's clock rate: the gait sees t0 + (t - t0) * "
+              '(1 + offset) from its start t0. 0 on a real board (its own clock drifts); in the simulation '
+              "a seeded draw models the board's resonator (docs/sim_core.md, \"Noise with a cause\")",
+              -0.05, 0.05),
     ParamSpec('lockstep', False, 'publish one command stamped with every /clock message (for the '
               "simulation's lock-step mode) instead of on change plus heartbeat"),
 )
@@ -52,6 +56,7 @@ class GaitNode(Node):
         config, values = read_config(self, PARAMS, lambda v: (config_from_params(v), v))
         self.robot_id = resolve_robot_id(self, values['robot_id'])
         self.gait = SquareGait(config)
+        self.clock_rate = 1.0 + values['clock_rate_offset']
         self.heartbeat = Time(seconds=values['heartbeat']).nanoseconds
         self.autostart: bool = values['autostart']
         self.start_at: float = values['start_at']
@@ -101,6 +106,10 @@ class GaitNode(Node):
         """Return ``now()`` in seconds."""
         return self.now().nanoseconds * 1e-9
 
+    def gait_clock(self, t: float) -> float:
+        """The gait's own clock at node time ``t`` (s): runs at ``clock_rate_offset`` from the start."""
+        return board_time(t, self.gait.start_time, self.clock_rate)
+
     def on_start(self, msg: Any) -> None:
         """Start (or restart) the gait at the stamped time."""
         stamp = msg.stamp.sec + msg.stamp.nanosec * 1e-9
@@ -112,7 +121,7 @@ class GaitNode(Node):
 
     def on_halt(self, msg: Any) -> None:
         """Hold the arms now and send the hold command at once."""
-        if self.gait.halt(self.now_seconds()):
+        if self.gait.halt(self.gait_clock(self.now_seconds())):
             self.on_tick()
 
     def on_clock(self, msg: Any) -> None:
@@ -124,7 +133,7 @@ class GaitNode(Node):
         self._latest_ns = now.nanoseconds
         if self.autostart and self.gait.start_time is None:
             self.gait.start(now.nanoseconds * 1e-9)
-        self.publisher.publish(self.to_message(self.gait.command(now.nanoseconds * 1e-9), now))
+        self.publisher.publish(self.to_message(self.gait.command(self.gait_clock(now.nanoseconds * 1e-9)), now))
 
     def on_tick(self) -> None:
         """Evaluate the gait and publish when the targets change or the heartbeat is due."""
@@ -133,7 +142,7 @@ class GaitNode(Node):
             return  # sim time not yet received
         if self.autostart and self.gait.start_time is None:
             self.gait.start(now.nanoseconds * 1e-9)
-        command = self.gait.command(now.nanoseconds * 1e-9)
+        command = self.gait.command(self.gait_clock(now.nanoseconds * 1e-9))
         if command.targets != self._last_targets or now.nanoseconds - self._last_sent_ns >= self.heartbeat:
             self.publisher.publish(self.to_message(command, now))
             self._last_targets = command.targets

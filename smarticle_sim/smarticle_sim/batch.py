@@ -98,7 +98,8 @@ def run_trial(config: SimConfig, scene: Scene, periods: float, sample_every: int
     n = len(scene.robots)
     n_faces = len(FSR_FACES)
     meta: dict[str, Any] = {
-        'robot': asdict(config.robot), 'physics': asdict(config.physics), 'scene': scene.name,
+        'robot': asdict(config.robot), 'physics': asdict(config.physics), 'noise': asdict(config.noise),
+        'scene': scene.name,
         'seed': scene.seed, 'periods': periods, 'period': period, 'start_time': start_time,
         'sample_every': sample_every,
         'sample_rate': 1.0 / (sample_every * config.physics.control_tick),

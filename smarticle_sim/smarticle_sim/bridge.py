@@ -27,7 +27,7 @@ from smarticle_common.params import ParamSpec
 from .camera import BACKENDS, CameraConfig, OverheadCamera
 from .errors import ConfigError
 from .scenes import SCENE_KINDS, Scene, build_scene
-from .settings import PhysicsConfig, SimConfig
+from .settings import FRICTION_LENGTH, NoiseConfig, PhysicsConfig, SimConfig
 from .physics import Physics
 from .runner import Runner
 
@@ -46,6 +46,10 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec('phase_jitter', 0.0, "dense scene: each robot's gait phase is offset by a seeded draw in "
               "+-this many periods (a stand-in for the robots' phase drift); give every gait node its "
               "robot's phase (BridgeSettings.scene() tells them; the demo does)", 0.0, 0.5),
+    ParamSpec('friction_sd', 0.0, 'relative standard deviation of the body-plate friction across the plate '
+              '(a seeded smooth random field from the scene seed; 0 = uniform; the cited figure is 0.06, '
+              'docs/sim_core.md "Noise with a cause")', 0.0, 0.2),
+    ParamSpec('friction_length', FRICTION_LENGTH, 'correlation length of the friction field (m)', 0.005, 1.0),
     ParamSpec('pair_r', 1.3, 'pair scene: centre distance in body lengths', 0.1, 10.0),
     ParamSpec('pair_theta_deg', 0.0, "pair scene: polar angle of robot 1 from robot 0's body x axis (deg)"),
     ParamSpec('pair_phi_deg', 180.0, 'pair scene: heading of robot 1 minus heading of robot 0 (deg)'),
@@ -137,6 +141,10 @@ class BridgeSettings:
         sim = SimConfig.from_preset(values['preset'], time_step=values['time_step'],
                                     control_tick=values['control_tick'],
                                     solver_iterations=values['solver_iterations'])
+        # the friction field is physics, so the bridge applies it; clock rates and servo timing belong to
+        # the gait nodes and the boards on this path (docs/sim_core.md, "Noise with a cause")
+        sim = sim.with_noise(NoiseConfig.none(), friction_sd=values['friction_sd'],
+                             friction_length=values['friction_length'])
         gait = GaitConfig.from_degrees(values['alpha_max_deg'], values['period'], sim.robot.servo_speed)
         try:
             camera = CameraConfig(

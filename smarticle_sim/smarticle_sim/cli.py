@@ -3,6 +3,8 @@
     smarticle-sim run --robots 7 --scene dense --periods 300 --alpha-max 90 --seed 1 --out run.npz
     smarticle-sim run --scene pair --r 1.3 --theta 90 --phi 180 --phase 0 0.25 --periods 75 --out pair.npz
     smarticle-sim bench --robots 7 --periods 10 [--cpu-time]
+    smarticle-sim run --noise paper --seed 1 --periods 100 --out noisy.npz
+    smarticle-sim phase-drift --robots 7 --periods 100 --seed 1
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ import argparse
 import math
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 from smarticle_common.gait import GaitConfig, GaitError
@@ -18,12 +21,13 @@ from smarticle_common.gait import GaitConfig, GaitError
 from smarticle_common.runs import save_npz
 
 from .batch import plot_trajectories, run_trial
+from .drift import format_phase_drift, phase_drift
 from .benchmark import benchmark, format_table
 from .errors import SimError
 from .scenes import Scene, build_scene
 from smarticle_common.facts import GAIT_PERIOD, PRESETS
 
-from .settings import SimConfig
+from .settings import NoiseConfig, SimConfig
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -33,7 +37,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest='command', required=True)
     run = sub.add_parser('run', help='simulate a scene and write an npz recording plus a trajectory PNG')
     bench = sub.add_parser('bench', help='time the Runner loop against a bare PyBullet loop (prints a table)')
-    for p in (run, bench):
+    drift = sub.add_parser('phase-drift', help="measure the robots' gait phase spread against time under "
+                                               'the noise (default: --noise paper; prints a table)')
+    for p in (run, bench, drift):
         p.add_argument('--scene', choices=('dense', 'pair', 'random'), default='dense')
         p.add_argument('--robots', type=int, default=7, help='number of robots (dense, random)')
         p.add_argument('--periods', type=float, default=300.0, help='gait periods to simulate')
@@ -53,6 +59,18 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument('--random-phases', action='store_true', help='random: seeded random gait phases')
         p.add_argument('--phase-jitter', type=float, default=0.0,
                        help='dense: seeded gait-phase offsets in +-this many periods (default 0: in phase)')
+        p.add_argument('--noise', choices=('none', 'paper'), default='paper' if p is drift else 'none',
+                       help='noise with a cause: none, or the cited figures (paper); the options below '
+                            'change single sources')
+        p.add_argument('--clock-rate-sd', type=float, default=None,
+                       help="relative sd of each robot's gait clock rate (paper: 0.0029)")
+        p.add_argument('--servo-jitter', type=float, default=None,
+                       help='servo command delay, uniform in [0, this] s (paper: 0.02, one 50 Hz PWM frame)')
+        p.add_argument('--friction-sd', type=float, default=None,
+                       help='relative sd of the body-plate friction across the plate (paper: 0.06)')
+        p.add_argument('--friction-length', type=float, default=None,
+                       help='correlation length of the friction field (m; paper: 0.05)')
+        p.add_argument('--noise-seed', type=int, default=None, help='seed of the noise draws (default: --seed)')
     run.add_argument('--out', type=Path, default=Path('run.npz'), help='npz output file')
     run.add_argument('--png', type=Path, default=None, help='trajectory PNG (default: next to --out)')
     run.add_argument('--sample-every', type=int, default=None,
@@ -61,6 +79,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument('--no-fsr', action='store_true',
                      help='do not record FSR forces and contacts (the default; overrides --fsr)')
     run.add_argument('--no-progress', action='store_true', help='no progress bar')
+    drift.add_argument('--every', type=int, default=10, help='table row every this many periods')
     bench.add_argument('--repeats', type=int, default=3)
     bench.add_argument('--cpu-time', action='store_true',
                        help='time with process CPU time instead of wall time (steadier on a shared machine)')
@@ -72,7 +91,16 @@ def config_from_args(args: argparse.Namespace) -> SimConfig:
     given = (('time_step', args.time_step), ('control_tick', args.control_tick),
              ('solver_iterations', args.solver_iterations))
     physics = {name: value for name, value in given if value is not None}
-    return SimConfig.from_preset(args.preset, **physics)
+    return SimConfig.from_preset(args.preset, **physics).with_noise(noise_from_args(args))
+
+
+def noise_from_args(args: argparse.Namespace) -> NoiseConfig:
+    """The NoiseConfig named by ``--noise`` and the single-source options."""
+    noise = NoiseConfig.paper() if args.noise == 'paper' else NoiseConfig.none()
+    given = (('clock_rate_sd', args.clock_rate_sd), ('servo_jitter', args.servo_jitter),
+             ('friction_sd', args.friction_sd), ('friction_length', args.friction_length),
+             ('seed', args.noise_seed))
+    return replace(noise, **{name: value for name, value in given if value is not None})
 
 
 def scene_from_args(args: argparse.Namespace, config: SimConfig) -> Scene:
@@ -98,6 +126,10 @@ def main(argv: list[str] | None = None) -> int:
                   f'{"CPU" if args.cpu_time else "wall"} time')
             print(format_table(rows))
             return 0
+        if args.command == 'phase-drift':
+            study = phase_drift(config, scene, args.periods)
+            print(format_phase_drift(study, args.every))
+            return 3 if study.trouble else 0
         rec = run_trial(config, scene, args.periods, sample_every=args.sample_every,
                         record_fsr=args.fsr and not args.no_fsr,
                         record_contacts=args.fsr and not args.no_fsr,

@@ -10,6 +10,9 @@ the plate, and two arm boxes on revolute joints at the body's ends. Joint 0 is a
 -z) and joint 1 is arm 2 (at +x, axis +z), so each joint position *is* the gait's alpha_i. Arms hang
 ``arm_clearance`` above the plate and their collisions with the plate are filtered out.
 
+With ``NoiseConfig.friction_sd`` > 0 the physics owns the plate's friction field (``noise.FrictionField``)
+and sets each body's friction from it on ``update_plate_friction`` (the runner calls it once per tick).
+
 Per-tick Python work is kept small: motor commands are sent only when a target or speed changes, state
 is read with one pass of batched calls and cached until the next step, and FSR forces and contacts are
 computed only when asked for.
@@ -31,6 +34,7 @@ from smarticle_common.topics import FSR_FACES
 
 from .settings import SimConfig
 from .errors import SceneError, SimError
+from .noise import FrictionField
 from .scenes import Scene
 from .trouble import check_penetration, check_state
 
@@ -68,6 +72,14 @@ class Physics:
         n = len(scene.robots)
         self._commands: list[list[tuple[float, float] | None]] = [[None, None] for _ in range(n)]
         self._build()
+        noise = config.noise
+        #: The plate's friction field (``NoiseConfig.friction_sd`` > 0), or None: uniform friction.
+        self.friction_field: FrictionField | None = None
+        self._friction_factor = np.full(n, np.nan)   # factor applied to each body now
+        if noise.friction_sd > 0.0:
+            self.friction_field = FrictionField(noise.friction_sd, noise.friction_length,
+                                                self._physics.plate_size, noise.trial_seed(scene.seed))
+            self.update_plate_friction()
 
     # ----------------------------------------------------------------- construction
     def _build(self) -> None:
@@ -213,6 +225,36 @@ class Physics:
                 positionGain=self._physics.servo_gain(), velocityGain=1.0)
             last[j] = command
 
+    # ----------------------------------------------------------------- plate friction
+    def update_plate_friction(self) -> int:
+        """Set each body's friction from the friction field at its position; return the bodies changed.
+
+        A body is changed only when the field there differs from its applied factor by more than
+        ``NoiseConfig.friction_tolerance`` (of the mean), so most calls cost one pose read per robot. Bullet
+        multiplies the two links' values, so the body link takes ``factor * link_frictions()[1]``: body-plate
+        friction follows the field, and this robot's contacts with other robots' arms and bodies (arm-body,
+        body-body) are scaled by the same factor. No field: nothing to do (0).
+        """
+        field = self.friction_field
+        if field is None:
+            return 0
+        factor = field.factor(self.body_xy())
+        changed = np.flatnonzero(~(np.abs(factor - self._friction_factor)
+                                   <= self.config.noise.friction_tolerance))
+        if changed.size:
+            body_friction = self._physics.link_frictions()[1]
+            for k in changed:
+                self._client.changeDynamics(self.body_ids[k], -1, lateralFriction=body_friction * factor[k])
+                self._friction_factor[k] = factor[k]
+        return int(changed.size)
+
+    def plate_friction(self, robot: int) -> float:
+        """Body-plate friction coefficient of ``robot`` now, from Bullet's dynamics info (body x plate)."""
+        k = self.check_robot(robot)
+        body = self._client.getDynamicsInfo(self.body_ids[k], -1)[1]
+        plate = self._client.getDynamicsInfo(self.plate_id, -1)[1]
+        return float(body * plate)
+
     # ----------------------------------------------------------------- stepping
     def step(self, n: int = 1) -> None:
         """Advance ``n`` physics steps (the runner adds controllers and trouble checks around them)."""
@@ -244,6 +286,13 @@ class Physics:
     def arm_velocities(self) -> np.ndarray:
         """(N, 2) arm angular velocities (rad/s)."""
         return self.state().arm_velocities
+
+    def body_xy(self) -> np.ndarray:
+        """(N, 2) body centre x, y (m): from the cached state if there is one, else one read per robot."""
+        if self._state is not None:
+            return self._state.positions[:, :2]
+        base_pose = self._client.getBasePositionAndOrientation
+        return np.array([base_pose(body)[0][:2] for body in self.body_ids])
 
     def _read_bases(self) -> tuple[np.ndarray, np.ndarray]:
         """Body centre positions (N, 3) and orientation quaternions (N, 4, xyzw) of every robot."""

@@ -4,10 +4,11 @@ Modelled on dm_control's ``rl/control.py``: the physics (``physics.Physics``) kn
 contacts and sensors; what acts on the robots is a *controller* plugged into the runner; the runner's
 ``tick`` is the only place that steps the physics:
 
-1. every controller's ``before_tick(runner)``, in the order given (e.g. the feedback controller, whose
+1. the plate's friction field, if the physics has one (``Physics.update_plate_friction``);
+2. every controller's ``before_tick(runner)``, in the order given (e.g. the feedback controller, whose
    halts the gait controller then respects, before the gait controller);
-2. ``physics.step(steps_per_tick)``;
-3. a trouble check every ``trouble_every`` ticks (``SimTrouble`` propagates to the caller).
+3. ``physics.step(steps_per_tick)``;
+4. a trouble check every ``trouble_every`` ticks (``SimTrouble`` propagates to the caller).
 
 ``Runner.run`` adds observer hooks (sampling, progress) called every k ticks, and an early stop.
 The batch trial (``batch.run_trial``), the sim bridge (``bridge.SimBridgeCore``), the experiments and
@@ -22,8 +23,10 @@ from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
-from smarticle_common.gait import GaitConfig, SquareGait
+from smarticle_common.gait import GaitConfig, SquareGait, board_time
 
+from .errors import ConfigError
+from .noise import ServoDelays, clock_rates
 from .physics import Physics
 from .scenes import Scene
 from .settings import SimConfig
@@ -62,6 +65,7 @@ class Runner:
         self.tick_count = 0
         self._steps_per_tick = physics.steps_per_tick
         self._trouble_every = physics.config.physics.trouble_every
+        self._friction = physics.update_plate_friction if physics.friction_field is not None else None
 
     @classmethod
     def with_gaits(cls, config: SimConfig, scene: Scene, before: Sequence[Controller] = ()) -> Runner:
@@ -79,6 +83,8 @@ class Runner:
 
     def tick(self) -> None:
         """One control tick: controllers act, the physics steps, every few ticks a trouble check."""
+        if self._friction is not None:
+            self._friction()
         for controller in self.controllers:
             controller.before_tick(self)
         if self.step_hooks:
@@ -136,20 +142,59 @@ class GaitController:
 
     A gait core is asked for a command only when its quarter has ended (or it was started or halted),
     so most ticks cost one comparison. Robots without a gait config take no commands from here.
+
+    Noise (``settings.NoiseConfig``, drawn by ``for_scene``): with ``clock_rates`` robot k's gait core
+    reads its own clock, t0 + (t - t0) * (1 + eps_k) from the shared start t0, so its quarters end every
+    T / 4 / (1 + eps_k) of sim time; with ``servo_jitter`` each quarter's command goes to the servos at
+    the quarter boundary plus a seeded delay in [0, servo_jitter] (at the first control tick from then on).
+    A command that went out is never re-timed; a halt drops a command still waiting and holds at once.
     """
 
-    def __init__(self, physics: Physics, gaits: Sequence[GaitConfig | None]) -> None:
-        if len(gaits) != physics.n_robots:
-            raise ValueError(f'GaitController: {len(gaits)} gait configs for {physics.n_robots} robots')
+    def __init__(self, physics: Physics, gaits: Sequence[GaitConfig | None],
+                 clock_rates: Sequence[float] | np.ndarray | None = None, servo_jitter: float = 0.0,
+                 seed: int = 0) -> None:
+        n = len(gaits)
+        if n != physics.n_robots:
+            raise ValueError(f'GaitController: {n} gait configs for {physics.n_robots} robots')
         self.physics = physics
         self._gaits: list[SquareGait | None] = [SquareGait(g) if g is not None else None for g in gaits]
-        self._next_update = np.full(len(gaits), math.inf)
+        self._next_update = np.full(n, math.inf)
         self._next_due = math.inf   # min of _next_update (or earlier): most ticks need no gait work
+        eps = np.zeros(n) if clock_rates is None else np.asarray(clock_rates, dtype=float)
+        if eps.shape != (n,) or not np.all(np.isfinite(eps)) or np.any(eps <= -0.5) or np.any(eps >= 0.5):
+            raise ConfigError(f'GaitController: clock_rates must be {n} finite offsets in (-0.5, 0.5), got {eps!r}')
+        #: Each robot's gait clock rate 1 + eps_k (1.0: the sim clock).
+        self.clock_rates: tuple[float, ...] = tuple(float(1.0 + e) for e in eps)
+        quarters = [g.period / 4.0 for g in gaits if g is not None]
+        if not (math.isfinite(servo_jitter) and 0.0 <= servo_jitter < min(quarters, default=math.inf)):
+            raise ConfigError(f'NoiseConfig.servo_jitter must be >= 0 s and shorter than a quarter period '
+                              f'({min(quarters, default=math.inf):g} s), got {servo_jitter!r}')
+        self._delays = ServoDelays(servo_jitter, n, seed) if servo_jitter > 0.0 else None
+        self._pending: list[tuple[tuple[float, float], float] | None] = [None] * n
+        self._pending_at = np.full(n, math.inf)   # sim time a delayed command goes out
 
     @classmethod
     def for_scene(cls, physics: Physics) -> GaitController:
-        """A controller running the gait each robot of the physics' scene was placed with."""
-        return cls(physics, [r.gait for r in physics.scene.robots])
+        """A controller running the gait each robot of the physics' scene was placed with (and its noise)."""
+        noise = physics.config.noise
+        seed = noise.trial_seed(physics.scene.seed)
+        return cls(physics, [r.gait for r in physics.scene.robots],
+                   clock_rates(noise, physics.n_robots, seed), noise.servo_jitter, seed)
+
+    def local_time(self, robot: int, t: float) -> float:
+        """Robot ``robot``'s gait clock at sim time ``t`` (the sim time itself before a start)."""
+        gait = self._gaits[robot]
+        return t if gait is None else board_time(t, gait.start_time, self.clock_rates[robot])
+
+    def pending(self, robot: int) -> float | None:
+        """Sim time at which ``robot``'s delayed command goes out, or None if none is waiting."""
+        at = float(self._pending_at[self.physics.check_robot(robot)])
+        return None if math.isinf(at) else at
+
+    def _sim_time(self, robot: int, local: float) -> float:
+        """Sim time at which robot ``robot``'s gait clock reads ``local`` (after a start)."""
+        start, rate = self._gaits[robot].start_time, self.clock_rates[robot]  # type: ignore[union-attr]
+        return local if rate == 1.0 else start + (local - start) / rate  # type: ignore[operator]
 
     def gait(self, robot: int) -> SquareGait | None:
         """The gait core driving ``robot``, or None if it takes no gait commands."""
@@ -164,14 +209,18 @@ class GaitController:
                 gait.start(start)
                 self._next_update[k] = start
                 self._next_due = min(self._next_due, start)
+                self._pending[k] = None
+                self._pending_at[k] = math.inf
 
     def halt(self, robot: int) -> bool:
         """Halt ``robot``'s gait now (arms hold; resume at its next period); False if not running."""
         k = self.physics.check_robot(robot)
         gait = self._gaits[k]
         now = self.physics.time
-        if gait is None or not gait.halt(now):
+        if gait is None or not gait.halt(self.local_time(k, now)):
             return False
+        self._pending[k] = None   # a command still waiting for its servo frame never goes out
+        self._pending_at[k] = math.inf
         self.physics.hold_arms(k)
         self._next_update[k] = now
         self._next_due = min(self._next_due, now)
@@ -183,6 +232,13 @@ class GaitController:
         now = physics.time
         if now + _TIME_EPS < self._next_due:
             return
+        delays = self._delays
+        if delays is not None:
+            for k in np.flatnonzero(self._pending_at <= now + _TIME_EPS):
+                targets, speed = self._pending[k]  # type: ignore[misc]
+                physics.send(int(k), targets, speed)
+                self._pending[k] = None
+                self._pending_at[k] = math.inf
         due = np.flatnonzero(self._next_update <= now + _TIME_EPS)
         for k in due:
             gait = self._gaits[k]
@@ -190,14 +246,26 @@ class GaitController:
                 self._next_update[k] = math.inf
                 continue
             t = max(now, gait.start_time if gait.start_time is not None else now)
+            t = self.local_time(int(k), t)
             command = gait.command(t + _TIME_EPS)
             if not command.halted:  # a halted robot keeps holding the angles it had when it stopped
-                physics.send(int(k), command.targets, command.speed)
+                if delays is None:
+                    physics.send(int(k), command.targets, command.speed)
+                else:
+                    at = float(self._next_update[k]) + delays.draw(int(k))   # the quarter boundary + delay
+                    if at <= now + _TIME_EPS:
+                        physics.send(int(k), command.targets, command.speed)
+                    else:
+                        self._pending[k] = (command.targets, command.speed)
+                        self._pending_at[k] = at
             tau = gait.gait_time(t + _TIME_EPS)
             next_tau = (math.floor(4.0 * tau) + 1) / 4.0
             cfg = gait.config
-            self._next_update[k] = gait.start_time + (next_tau - cfg.phase) * cfg.period  # type: ignore[operator]
+            boundary = gait.start_time + (next_tau - cfg.phase) * cfg.period  # type: ignore[operator]
+            self._next_update[k] = self._sim_time(int(k), boundary)
         self._next_due = float(self._next_update.min())
+        if delays is not None:
+            self._next_due = min(self._next_due, float(self._pending_at.min()))
 
 
 class Decision(Protocol):

@@ -152,12 +152,100 @@ def steps_per_tick(control_tick: float, time_step: float) -> int:
     return n
 
 
+#: Relative standard deviation of a robot's gait clock rate. The paper does not name the robots' board; an
+#: Arduino-class board (ATmega328P) clocked by a ceramic resonator is assumed, as on the Arduino Pro Mini.
+#: Ceramic resonators are specified to +-0.5 % initial tolerance (e.g. Murata CSTNE: +-0.5 %, plus up to
+#: +-0.3 % over -40..85 C); read as a uniform spread over +-0.5 %, the sd is 0.5 % / sqrt(3) = 0.29 %. A
+#: measured Arduino Uno's resonator-clocked ATmega ran at 15,959,622 Hz for 16 MHz (-0.25 %). A quartz
+#: crystal (+-20-50 ppm) would give 100 times less.
+CLOCK_RATE_SD = 0.005 / math.sqrt(3.0)
+#: Servo timing jitter (s): a hobby servo takes a new target only with the next pulse of its 50 Hz PWM
+#: frame (20 ms; the Arduino Servo library's REFRESH_INTERVAL is 20000 us, the Pololu Maestro's default
+#: period 20 ms), so a command waits a uniform 0-20 ms before the servo acts on it.
+SERVO_FRAME = 0.020
+#: Relative standard deviation of the body-plate friction across the plate. No measurement of the plate
+#: exists; the figure is the repeatability of a friction-coefficient test on one material pair (ASTM D2534:
+#: two results differ by more than 0.06 in 1 case of 20, i.e. a single-result sd of 0.06 / 2.8 = 0.021,
+#: 6 % of mu = 0.35).
+FRICTION_SD = 0.06
+#: Correlation length (m) of the friction field: an assumption (about one body width, 5.4 cm); nothing
+#: about the plate's finish is measured.
+FRICTION_LENGTH = 0.05
+#: The friction field is clipped at this many standard deviations, so friction stays positive.
+FRICTION_CLIP = 4.0
+#: Upper bounds of the noise settings (beyond them the model does not mean what it says).
+_NOISE_LIMITS = {'clock_rate_sd': 0.05, 'servo_jitter': 0.1, 'friction_sd': 1.0 / (FRICTION_CLIP + 1.0),
+                 'friction_tolerance': 0.1}
+
+
+@dataclass(frozen=True)
+class NoiseConfig:
+    """Noise with a cause: robot clocks, servo timing and plate friction, each seeded and zero on request.
+
+    The dataclass defaults are the cited figures above (``NoiseConfig.paper()``); ``NoiseConfig.none()``
+    switches every source off and gives exactly the noise-free trajectories. Draws come from the trial
+    seed (``seed``, or the scene's seed when None) through their own random streams, so a seed places the
+    robots the same with or without noise. docs/sim_core.md, "Noise with a cause".
+    """
+
+    #: Relative sd of each robot's gait clock rate: robot k's gait sees t0 + (t - t0) * (1 + eps_k),
+    #: eps_k ~ Normal(0, clock_rate_sd) (clipped at 4 sd).
+    clock_rate_sd: float = CLOCK_RATE_SD
+    #: Each quarter's servo command goes out after a seeded delay, uniform in [0, servo_jitter] (s).
+    servo_jitter: float = SERVO_FRAME
+    #: Relative sd of the body-plate friction across the plate (a smooth seeded Gaussian random field).
+    friction_sd: float = FRICTION_SD
+    #: Correlation length (m) of the friction field: correlation exp(-d^2 / (2 friction_length^2)).
+    friction_length: float = FRICTION_LENGTH
+    #: A robot's friction is updated (once per control tick at most) when the field at its position differs
+    #: from the applied value by more than this fraction of the mean friction.
+    friction_tolerance: float = 0.002
+    #: Seed of the noise draws; None: the scene's seed (0 if the scene has none).
+    seed: int | None = None
+
+    def __post_init__(self) -> None:
+        require_non_negative(self, 'clock_rate_sd', 'servo_jitter', 'friction_sd', 'friction_tolerance',
+                             error=ConfigError)
+        require_positive(self, 'friction_length', error=ConfigError)
+        for name, limit in _NOISE_LIMITS.items():
+            if getattr(self, name) > limit:
+                raise ConfigError(f'NoiseConfig.{name} must be at most {limit:g}, got {getattr(self, name)!r}'
+                                  + (f' (the field is clipped at {FRICTION_CLIP:g} sd and friction must stay '
+                                     'positive)' if name == 'friction_sd' else ''))
+        if self.seed is not None and (isinstance(self.seed, bool) or not isinstance(self.seed, int)
+                                      or self.seed < 0):
+            raise ConfigError(f'NoiseConfig.seed must be None or an integer >= 0, got {self.seed!r}')
+
+    @classmethod
+    def none(cls) -> NoiseConfig:
+        """Every source off: the noise-free model, bit for bit."""
+        return cls(clock_rate_sd=0.0, servo_jitter=0.0, friction_sd=0.0)
+
+    @classmethod
+    def paper(cls) -> NoiseConfig:
+        """The cited figures: resonator clocks, 50 Hz servo frames, friction test repeatability."""
+        return cls()
+
+    @property
+    def enabled(self) -> bool:
+        """True if any source is on."""
+        return self.clock_rate_sd > 0.0 or self.servo_jitter > 0.0 or self.friction_sd > 0.0
+
+    def trial_seed(self, scene_seed: int | None) -> int:
+        """The seed of a trial's noise draws: ``seed``, else the scene's seed, else 0."""
+        if self.seed is not None:
+            return self.seed
+        return 0 if scene_seed is None else int(scene_seed)
+
+
 @dataclass(frozen=True)
 class SimConfig:
     """Everything a Physics needs besides the scene: the robot spec and the physics settings."""
 
     robot: RobotSpec = SMALL
     physics: PhysicsConfig = field(default_factory=PhysicsConfig)
+    #: Noise with a cause; off by default (``NoiseConfig.none()``), see ``with_noise``.
+    noise: NoiseConfig = field(default_factory=NoiseConfig.none)
 
     def __post_init__(self) -> None:
         """Refuse settings that cannot converge for this robot; warn about ones that converge poorly."""
@@ -200,3 +288,7 @@ class SimConfig:
     def with_physics(self, **changes: Any) -> SimConfig:
         """Return a copy with some PhysicsConfig fields changed (validated)."""
         return replace(self, physics=replace(self.physics, **changes))
+
+    def with_noise(self, noise: NoiseConfig | None = None, **changes: Any) -> SimConfig:
+        """Return a copy with ``noise`` (default: ``NoiseConfig.paper()``), some of its fields changed."""
+        return replace(self, noise=replace(NoiseConfig.paper() if noise is None else noise, **changes))

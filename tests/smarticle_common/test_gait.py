@@ -9,7 +9,7 @@ import pytest
 
 from smarticle_common.facts import SERVO_SPEED
 
-from smarticle_common.gait import CORNER_SIGNS, GaitConfig, GaitError, SquareGait, open_loop_angles
+from smarticle_common.gait import CORNER_SIGNS, GaitConfig, GaitError, SquareGait, board_time, open_loop_angles
 
 A = math.radians(90.0)
 
@@ -139,3 +139,14 @@ def test_full_amplitude_range_fits_default_speed() -> None:
         gait = SquareGait(config)
         gait.start(0.0)
         assert gait.command(0.4 + 1e-6).positions[0] == pytest.approx(-config.alpha_max)
+
+
+def test_board_time_runs_at_its_rate_from_the_start() -> None:
+    """A board clock 0.5 % fast reads 0.5 % more time since the start; before a start, the reference time."""
+    assert board_time(7.0, None, 1.005) == 7.0
+    assert board_time(7.0, 2.0, 1.0) == 7.0
+    assert board_time(2.0, 2.0, 1.005) == 2.0
+    assert board_time(82.0, 2.0, 1.005) == pytest.approx(2.0 + 80.0 * 1.005)
+    gait = SquareGait(GaitConfig.from_degrees(90.0))
+    gait.start(0.0)
+    assert gait.gait_time(board_time(50 * gait.config.period, 0.0, 1.005)) == pytest.approx(50.25)

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from smarticle_common import topics
-from smarticle_common.gait import GaitConfig, SquareGait
+from smarticle_common.gait import GaitConfig, SquareGait, board_time
 from tests.helpers.ros import executable, spin_until
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -59,6 +59,38 @@ def test_gait_node_follows_start_and_halt(nodes, ros_node) -> None:  # type: ign
     # within one period the next gait period begins and the targets move on from the held pose
     spin_until(node, lambda: got[-1][1] != held, 1.0)
     assert got[-1][1] != held, 'the gait must resume at the next period'
+
+
+@pytest.mark.integration
+def test_gait_node_clock_rate_offset_runs_its_gait_clock_fast(nodes, ros_node) -> None:  # type: ignore[no-untyped-def]
+    """clock_rate_offset 0.05: the gait sees t0 + (t - t0) * 1.05, the same board_time as the batch path."""
+    from sensor_msgs.msg import JointState
+    from std_msgs.msg import Header
+
+    nodes.start('gait', '--ros-args', '-p', 'robot_id:=1', '-p', 'alpha_max_deg:=60.0', '-p', 'period:=0.8',
+                '-p', 'heartbeat:=0.05', '-p', 'clock_rate_offset:=0.05')
+    node = ros_node('gait_clock_probe')
+    got: list[tuple[float, tuple[float, ...]]] = []
+    node.create_subscription(JointState, topics.topic('joint_commands', 1),
+                             lambda m: got.append((m.header.stamp.sec + m.header.stamp.nanosec * 1e-9,
+                                                   tuple(m.position))),
+                             topics.qos_profile(topics.Qos.COMMAND))
+    start_pub = node.create_publisher(Header, topics.topic('start'), topics.qos_profile(topics.Qos.LATCHED))
+    assert spin_until(node, lambda: len(got) >= 2, 15.0), 'no commands before the start'
+    t0 = time.time() + 0.5
+    msg = Header()
+    msg.stamp.sec, msg.stamp.nanosec = int(t0), int((t0 % 1) * 1e9)
+    start_pub.publish(msg)
+    spin_until(node, lambda: time.time() > t0 + 2.5, 6.0)
+    reference = SquareGait(GaitConfig.from_degrees(60.0, period=0.8))
+    reference.start(t0)
+    started = [(t, pos) for t, pos in got if t >= t0]
+    assert len(started) > 30
+    assert all(pos == pytest.approx(reference.command(board_time(t, t0, 1.05)).targets, abs=1e-9)
+               for t, pos in started)
+    plain = SquareGait(GaitConfig.from_degrees(60.0, period=0.8))
+    plain.start(t0)
+    assert any(pos != pytest.approx(plain.command(t).targets, abs=1e-9) for t, pos in started)
 
 
 def test_invalid_parameter_stops_startup_with_a_clear_error() -> None:
