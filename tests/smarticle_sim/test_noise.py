@@ -21,9 +21,10 @@ from smarticle_sim.scenes import RobotPlacement, Scene, dense_scene
 from smarticle_sim.settings import CLOCK_RATE_SD, FRICTION_SD, SERVO_FRAME, NoiseConfig, SimConfig
 
 #: SHA-256 of the poses of ``dense_scene(seed=3)``, 7 robots, alpha_max 90 deg, 10 periods, default settings,
-#: computed on the code before the noise existed. With the noise off the trajectories must not change by a
+#: computed on the code before the noise existed (at the converged defaults of docs/sim_calibration.md).
+#: With the noise off the trajectories must not change by a
 #: bit; if this fails after a PyBullet or NumPy upgrade, recompute it on the commit before the noise.
-PRE_NOISE_POSES_SHA256 = '316fb4cabb624f7d1d61d30ea359b5393a4453b7c7778816dee5440635619981'
+PRE_NOISE_POSES_SHA256 = '2e8c568bcf98cc5dbe3c9ade27fc0c2ea439bc0476846591d2098214012331df'
 
 
 def poses_hash(config: SimConfig, periods: float = 10.0, seed: int = 3) -> str:
