@@ -4,7 +4,8 @@ Subscribes ``/overhead_camera/image_raw`` and ``/overhead_camera/camera_info``; 
 exactly one PoseArray (index = robot id) stamped with the frame's stamp: a robot whose tag was not
 found, or was rejected, gets the unseen pose (``topics.UNSEEN_Z``: finite, so RViz accepts the message;
 never an old pose), and so does every robot of a frame the tracker cannot use (unsupported encoding,
-wrong size for the calibration, no calibration). Problems are logged (throttled) and counted on /diagnostics; the node keeps running. See docs/tracking.md.
+wrong size for the calibration, no calibration). Problems are logged (throttled) and counted on
+/diagnostics; the node keeps running. See docs/tracking.md.
 """
 
 from __future__ import annotations

@@ -82,7 +82,7 @@ def _planar(pose: Any) -> tuple[float, float, float]:
 
 
 def poses_from_messages(items: Iterable[tuple[int, Any]]) -> PoseSeries:
-    """Build a PoseSeries from (log time ns, decoded PoseArray) pairs; unseen robots and robots missing later are NaN."""
+    """Build a PoseSeries from (log time ns, decoded PoseArray) pairs; unseen and missing robots are NaN."""
     rows: list[list[tuple[float, float, float]]] = []
     log_time: list[float] = []
     stamp: list[float] = []
