@@ -3,8 +3,8 @@
 Subscribes ``/smarticles/poses`` (index = robot id; the unseen pose of ``topics.UNSEEN_Z`` = not seen;
 yaw = heading of the body normal) and, with ``show_arms``, ``/smarticle_<k>/joint_states``. Feeds
 ``GliderMonitor`` (all maths there) and publishes, every ``publish_period`` of message time,
-``/smarticles/gliders`` (one DiagnosticStatus per bound pair) and ``/smarticles/markers`` (robot outlines and glider bonds, from
-``markers.scene_markers``). Faults go to ``/diagnostics``. See docs/tracking.md.
+``/smarticles/gliders`` (one DiagnosticStatus per bound pair) and ``/smarticles/markers`` (robot
+outlines and glider bonds, from ``markers.scene_markers``). Faults go to ``/diagnostics``. See docs/tracking.md.
 """
 
 from __future__ import annotations
