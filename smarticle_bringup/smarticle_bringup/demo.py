@@ -130,7 +130,7 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
                 if args.feedback:
                     group.start('feedback', '--ros-args', *namespace, '-p', 'use_sim_time:=true',
                                 '-p', f'period:={period}', '-p', f'phase:={phase!r}', '-p', f'start_at:={START_AT}')
-            group.start('glider_monitor', '--ros-args', '-p', 'use_sim_time:=true', '-p', f't0:={START_AT}',
+            group.start('glider_monitor', '--ros-args', '-p', 'use_sim_time:=true', '-p', f'start_at:={START_AT}',
                         '-p', f'min_periods:={args.min_periods}', '-p', 'show_arms:=false')
             recording = start_recording(group, bag, [topics.topic(key) for key in RECORDED])
             recording.wait_subscribed(timeout=30.0)

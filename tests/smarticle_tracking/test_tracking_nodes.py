@@ -65,7 +65,7 @@ def test_glider_monitor_reports_a_constructed_glider(nodes, ros_node) -> None:  
     from visualization_msgs.msg import Marker, MarkerArray
 
     monitor = nodes.start('glider_monitor', '--ros-args', '-p', 'publish_period:=0.0', '-p', 'min_periods:=3',
-                          '-p', 't0:=0.0',
+                          '-p', 'start_at:=0.0',
                           '-p', 'show_arms:=false')
     node = ros_node('glider_probe')
     reports: list[Any] = []
