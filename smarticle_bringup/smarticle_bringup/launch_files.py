@@ -48,6 +48,7 @@ from xml.parsers import expat
 MAX_INCLUDE_DEPTH = 256
 
 _TRUE, _FALSE = ('true', '1'), ('false', '0')
+EMPTY_YAML_STRING = "''"
 
 
 class LaunchFileError(ValueError):
@@ -101,8 +102,10 @@ class NodeAction:
         if self.namespace not in ('', '/'):
             out += ['-r', f'__ns:={self.namespace}']
         for param in self.params:
-            out += ['--params-file', param.path] if isinstance(param, ParamFile) else \
-                ['-p', f'{param.name}:={param.value}']
+            if isinstance(param, ParamFile):
+                out += ['--params-file', param.path]
+            else:   # the value is YAML, as for ros2 run; an empty value is the empty string
+                out += ['-p', f'{param.name}:={param.value or EMPTY_YAML_STRING}']
         for source, target in self.remaps:
             out += ['-r', f'{source}:={target}']
         return out

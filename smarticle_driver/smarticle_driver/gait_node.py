@@ -47,8 +47,9 @@ def config_from_params(values: dict[str, Any]) -> GaitConfig:
 class GaitNode(Node):
     """Thin ROS shell around smarticle_common.gait.SquareGait."""
 
-    def __init__(self) -> None:
-        super().__init__(NODE_NAME)
+    def __init__(self, **node_options: Any) -> None:
+        """Build the node; ``node_options`` go to rclpy's Node (a composing host's ``cli_args``)."""
+        super().__init__(NODE_NAME, **node_options)
         config, values = read_config(self, PARAMS, lambda v: (config_from_params(v), v))
         self.robot_id = resolve_robot_id(self, values['robot_id'])
         self.gait = SquareGait(config)

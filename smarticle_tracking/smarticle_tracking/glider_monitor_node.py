@@ -76,8 +76,9 @@ def marker_message(shape: MarkerShape, header: Any) -> Marker:
 class GliderMonitorNode(Node):
     """Thin ROS shell around GliderMonitor and scene_markers."""
 
-    def __init__(self) -> None:
-        super().__init__(MONITOR_NODE)
+    def __init__(self, **node_options: Any) -> None:
+        """Build the node; ``node_options`` go to rclpy's Node (a composing host's ``cli_args``)."""
+        super().__init__(MONITOR_NODE, **node_options)
         self.settings = read_config(self, MONITOR_PARAMS, monitor_settings)
         self.monitor = GliderMonitor(self.settings.glider, self.settings.t0, self.settings.history)
         qos = {key: topics.qos_profile(topics.spec_of(key).qos) for key in topics.BY_KEY}

@@ -32,8 +32,9 @@ from .tracker import TagTracker, image_from_buffer
 class TrackerNode(Node):
     """Thin ROS shell around TagTracker."""
 
-    def __init__(self) -> None:
-        super().__init__(TRACKER_NODE)
+    def __init__(self, **node_options: Any) -> None:
+        """Build the node; ``node_options`` go to rclpy's Node (a composing host's ``cli_args``)."""
+        super().__init__(TRACKER_NODE, **node_options)
         self.config, values = read_config(self, TRACKER_PARAMS, lambda v: (tracker_config(v), v))
         self.tracker: TagTracker | None = None
         self.calibration_problem = ''
