@@ -138,7 +138,8 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         plan = plan_from_command_line(args.words)
-        log_dir = args.log_dir or Path('out/launch') / f'{plan.path.name.split(".")[0]}-{time.strftime("%Y%m%d-%H%M%S")}'
+        stem = plan.path.name.split('.')[0]
+        log_dir = args.log_dir or Path('out/launch') / f'{stem}-{time.strftime("%Y%m%d-%H%M%S")}'
         launch = Launch(plan, log_dir)
     except LaunchFileError as err:
         print(f'smarticle-launch: {err}', file=sys.stderr)
