@@ -29,6 +29,7 @@ setup(
             'smarticle-demo = smarticle_bringup.demo:entry',
             'smarticle-launch = smarticle_bringup.launcher:entry',
             'smarticle-compose = smarticle_bringup.compose:entry',
+            'smarticle-view = smarticle_bringup.view_node:main',
             'smarticle-sim-camera-calibrate = smarticle_bringup.sim_camera:entry',
         ],
     },

@@ -46,16 +46,13 @@ def executable_path(node: NodeAction) -> str:
 
 def plan_from_command_line(words: list[str]) -> LaunchPlan:
     """``[PACKAGE] FILE [name:=value ...]`` as a checked plan (LaunchFileError if anything is wrong)."""
-    positional = [w for w in words if ':=' not in w]
-    arguments = parse_arguments([w for w in words if ':=' in w])
-    if len(positional) == 1:
-        path = Path(positional[0])
-    elif len(positional) == 2:
-        path = find_launch_file(positional[0], positional[1])
+    if not words:
+        raise LaunchFileError('give a launch file, or a package and a launch file name, then name:=value arguments')
+    if words[0].endswith('.xml') or Path(words[0]).is_file() or len(words) == 1 or ':=' in words[1]:
+        path, rest = Path(words[0]), words[1:]
     else:
-        raise LaunchFileError('give a launch file, or a package and a launch file name, then name:=value '
-                              f'arguments (got {" ".join(positional) or "nothing"})')
-    return resolve(path, arguments)
+        path, rest = find_launch_file(words[0], words[1]), words[2:]
+    return resolve(path, parse_arguments(rest))
 
 
 @dataclass
