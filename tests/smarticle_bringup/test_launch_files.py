@@ -117,7 +117,8 @@ def test_substitutions_conditions_groups_and_includes(tmp_path: Path, monkeypatc
             args="--flag $(env SMARTICLE_TEST_PORT) $(env SMARTICLE_UNSET fallback)">
         <param name="n" value="$(var n)"/>
       </node>
-      <node pkg="smarticle_driver" exec="gait" name="c" if="$(eval '$(var n) &gt; 5 or &quot;$(var flag)&quot; == &quot;true&quot;')"/>
+      <node pkg="smarticle_driver" exec="gait" name="c"
+            if="$(eval '$(var n) &gt; 5 or &quot;$(var flag)&quot; == &quot;true&quot;')"/>
     </launch>''')
     plan = resolve(path)
     assert plan.arguments == {'n': '2', 'flag': 'false'}
