@@ -160,7 +160,7 @@ def test_a_new_amplitude_starts_at_the_next_period_and_never_jumps() -> None:
     last = [c for t, c in zip(times[201:], after, strict=True) if t >= 3.6]
     assert {round(abs(v), 6) for c in last for v in c.targets} == {round(new, 6)}
     assert gait.pending is None and gait.config.alpha_max == new
-    steps = [abs(b - a) for x, y in zip([*before, *after], [*before, *after][1:]) for a, b in
+    steps = [abs(b - a) for x, y in zip([*before, *after], [*before, *after][1:], strict=False) for a, b in
              zip(x.positions, y.positions, strict=True)]
     assert max(steps) <= gait.config.servo_speed * 0.01 + 1e-9          # never faster than the servo
     with pytest.raises(GaitError):
