@@ -44,7 +44,7 @@ NAME = 'smarticle-compose'
 def component_class(package: str, executable: str) -> Callable[..., Any]:
     """The node class of ``package``/``executable`` (KeyError if it is not composable)."""
     module, _, cls = COMPONENTS[(package, executable)].partition(':')
-    return getattr(importlib.import_module(module), cls)  # type: ignore[no-any-return]
+    return getattr(importlib.import_module(module), cls)
 
 
 def plan_nodes(words: Sequence[str]) -> list[Any]:
