@@ -115,12 +115,13 @@ def host(actions: Sequence[Any], args: list[str] | None = None,
 
 def main(argv: list[str] | None = None) -> int:
     """Run the host; return the exit code."""
-    from rclpy.utilities import remove_ros_args
-
     from .launch_files import LaunchFileError
 
     argv = sys.argv[1:] if argv is None else argv
-    words = [w for w in remove_ros_args(['prog', *argv])[1:]]
+    # the host's own ROS arguments start at --ros-args; everything before is the file and name:=value words
+    # (rclpy would take those for legacy remapping rules, so they never reach rclpy.init)
+    cut = argv.index('--ros-args') if '--ros-args' in argv else len(argv)
+    words, ros_args = argv[:cut], argv[cut:]
     if not words or words[0] in ('-h', '--help'):
         print(__doc__)
         return 0 if words else 2
@@ -129,7 +130,7 @@ def main(argv: list[str] | None = None) -> int:
     except LaunchFileError as err:
         print(f'{NAME}: {err}', file=sys.stderr)
         return 2
-    return host(actions, ['prog', *argv])
+    return host(actions, [NAME, *ros_args])
 
 
 def entry() -> None:
