@@ -28,7 +28,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 
-from tests.benchmarks._common import markdown_table, out_path, write_csv  # noqa: E402
+from tests.benchmarks._common import markdown_table, out_path, write_csv
 
 START_AT, PERIOD = 0.5, 1.6
 

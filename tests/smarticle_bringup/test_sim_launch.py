@@ -50,7 +50,7 @@ def test_composed_and_separate_runs_give_every_robot_the_same_trajectory(ros_nod
         got.clear()
         proc = launch(tmp_path, composed, 'robots:=2', 'feedback:=false', f'composed:={composed}',
                       f'duration:={DURATION!r}', 'wait_for_subscribers:=2', 'seed:=3')
-        finished = spin_until(node, lambda: proc.poll() is not None, 90.0)
+        finished = spin_until(node, lambda proc=proc: proc.poll() is not None, 90.0)
         out = proc.communicate(timeout=30)[0] if finished else ''
         assert finished and proc.returncode == 0, out + logs(tmp_path, composed)
         spin_until(node, lambda: False, 0.2)
