@@ -235,6 +235,9 @@ class ServoBridgeCore:
         #: Serialises the board and all the state above; held for one board transaction at a time.
         self.lock: AbstractContextManager[Any] = threading.Lock()
         self._closed = False
+        #: The port state the last step reported: a loss found by any thread (a command, the error poll)
+        #: is reported once, by the next step.
+        self._reported_open = False
 
     @classmethod
     def from_config(cls, config: BridgeConfig,
@@ -256,6 +259,7 @@ class ServoBridgeCore:
             if self.link.is_open:
                 return True, []
             if self.link.poll():
+                self._reported_open = True
                 return True, self._on_open(now)
             return False, [self.link.last_error]
 
@@ -303,7 +307,6 @@ class ServoBridgeCore:
         with self.lock:
             if self._closed:
                 return result
-            was_open = self.link.is_open
             if self.link.poll():
                 result.events.append(f'port {self.link.port} opened')
                 result.warnings.extend(self._on_open(now))
@@ -314,9 +317,10 @@ class ServoBridgeCore:
             result.fsr_counts = tuple(counts)
             result.fsr_newtons = tuple(m.newtons(c) for m, c in zip(self.fsrs, counts, strict=True))
         with self.lock:
-            if was_open and not self.link.is_open:
+            if self._reported_open and not self.link.is_open:
                 result.events.append(f'port {self.link.port} lost ({self.link.last_error}); '
                                      'reopening with back-off')
+            self._reported_open = self.link.is_open
             if self.link.is_open and all(j.model.known for j in self.joints):
                 result.joint_positions = tuple(j.cal.pulse_to_angle(j.model.position(now)) for j in self.joints)
                 result.joint_velocities = tuple(j.model.velocity(now) / j.cal.us_per_rad for j in self.joints)
