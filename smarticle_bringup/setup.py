@@ -1,5 +1,7 @@
 """ament_python package smarticle_bringup: how the smarticle stack is started."""
 
+from glob import glob
+
 from setuptools import find_packages, setup
 
 package_name = 'smarticle_bringup'
@@ -12,6 +14,8 @@ setup(
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
+        ('share/' + package_name + '/launch', sorted(glob('launch/*.launch.xml'))),
+        ('share/' + package_name + '/config', sorted(glob('config/*'))),
     ],
     install_requires=['setuptools'],
     zip_safe=True,
@@ -23,6 +27,9 @@ setup(
     entry_points={
         'console_scripts': [
             'smarticle-demo = smarticle_bringup.demo:entry',
+            'smarticle-launch = smarticle_bringup.launcher:entry',
+            'smarticle-compose = smarticle_bringup.compose:entry',
+            'smarticle-view = smarticle_bringup.view_node:main',
             'smarticle-sim-camera-calibrate = smarticle_bringup.sim_camera:entry',
         ],
     },

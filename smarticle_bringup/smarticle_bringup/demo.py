@@ -1,10 +1,13 @@
 """The main demo: a sim-in-the-loop run of the stack with its default settings.
 
-Starts the sim bridge, one gait node per robot, the live glider monitor and a bag recorder as separate
-processes talking over DDS (lock-step, so the physics is reproducible), listens to
-``/smarticles/poses`` like any other node would, then finds the gliders with the glider analysis core,
-prints a table and writes figures, the poses and an mcap bag to ``out/demo/``.
-Usage: ``./demo.sh [--robots 7] [--periods 60] [--alpha-max 90] [--seed 1] [--no-feedback]``.
+Starts ``smarticle_bringup/launch/sim.launch.xml`` through the project's launcher (the file ``ros2 launch``
+reads on a board): the sim bridge, one gait and one feedback node per robot and the live glider monitor,
+composed in one process on one executor (``--separate``: each its own process), a bag recorder and, with
+``--view``, the Foxglove live view; all talk over DDS in lock-step, so the physics is reproducible. The
+demo listens to ``/smarticles/poses`` like any other node would, then finds the gliders with the glider
+analysis core, prints a table and writes figures, the poses and an mcap bag to ``out/demo/``.
+Usage: ``./demo.sh [--robots 7] [--periods 60] [--alpha-max 90] [--seed 1] [--no-feedback] [--separate]
+[--view]``.
 """
 
 from __future__ import annotations
@@ -22,8 +25,6 @@ import numpy as np
 from smarticle_common.facts import GAIT_PERIOD, SMALL
 from smarticle_common.runs import Recording, save_npz
 
-START_AT = 0.5  # sim time (s) of the synchronised gait start
-RECORDED = ('poses', 'clock', 'start', 'gliders', 'markers')  # contract keys of the topics the demo records
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -33,7 +34,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--scene', choices=('dense', 'random', 'pair'), default='dense',
                         help="starting arrangement (default: densely packed, the paper's Fig. 1(c))")
     parser.add_argument('--periods', type=float, default=60.0,
-                        help='gait periods to run (default 60: under two minutes with 17 processes on two cores)')
+                        help='gait periods to run (default 60)')
     parser.add_argument('--alpha-max', type=float, default=90.0, help='gait amplitude in degrees (default 90)')
     parser.add_argument('--seed', type=int, default=1, help='seed of the starting arrangement')
     parser.add_argument('--phase-jitter', type=float, default=0.05,
@@ -44,6 +45,13 @@ def build_parser() -> argparse.ArgumentParser:
                         help='run the tactile feedback node of every robot (impact window from '
                              'smarticle_feedback/config/feedback.yaml; default on); the sim then publishes FSR '
                              'forces. --no-feedback runs the open-loop gait only')
+    parser.add_argument('--separate', action='store_true',
+                        help='run every node as its own process (default: the stack composed in one process '
+                             'on one executor, smarticle-compose; same trajectories, faster)')
+    parser.add_argument('--view', action='store_true',
+                        help='serve the live view to Foxglove on ws://localhost:8765 (smarticle-view; open it in '
+                             'Foxglove with smarticle_bringup/config/foxglove_layout.json)')
+    parser.add_argument('--view-port', type=int, default=8765, help='WebSocket port of --view (default 8765)')
     parser.add_argument('--min-periods', type=int, default=30,
                         help='a pair bound this many periods is a glider (default 30, as in the paper)')
     parser.add_argument('--out', type=Path, default=Path('out/demo'), help='output folder')
@@ -63,26 +71,58 @@ def report_graph(names: list[str], path: Path) -> None:
 SIM_TROUBLE_EXIT = 3
 
 
+def write_params(args: argparse.Namespace, path: Path) -> dict[str, Any]:
+    """The run's parameter file: the shared stack.yaml with the demo's amplitude, plus per-robot phases.
+
+    ``/**`` is the shipped ``config/stack.yaml`` with ``alpha_max_deg`` replaced; ``/sim_bridge`` gets the
+    phase jitter and ``/smarticle_<k>/gait`` and ``/smarticle_<k>/feedback`` their robot's phase (from the
+    sim bridge's own scene, so the start shape and the gaits agree); ``/glider_monitor`` the glider length.
+    Returns the shared settings (period, start_at, ...).
+    """
+    import yaml
+    from smarticle_sim.bridge import BridgeSettings
+
+    from .launch_files import package_share
+
+    stack = yaml.safe_load((package_share('smarticle_bringup') / 'config' / 'stack.yaml').read_text(encoding='utf-8'))
+    shared = dict(stack['/**']['ros__parameters'], alpha_max_deg=float(args.alpha_max))
+    scene = {'robots': args.robots, 'scene': args.scene, 'seed': args.seed, 'phase_jitter': args.phase_jitter}
+    robots = BridgeSettings.defaults(alpha_max_deg=args.alpha_max, period=shared['period'], **scene).scene().robots
+    data: dict[str, Any] = {'/**': {'ros__parameters': shared},
+                            '/sim_bridge': {'ros__parameters': {'phase_jitter': float(args.phase_jitter)}},
+                            '/glider_monitor': {'ros__parameters': {'min_periods': args.min_periods}}}
+    for k, robot in enumerate(robots):
+        phase = float(robot.gait.phase) if robot.gait is not None else 0.0
+        for node in ('gait', 'feedback'):
+            data[f'/smarticle_{k}/{node}'] = {'ros__parameters': {'phase': phase}}
+    path.write_text(yaml.safe_dump(data, sort_keys=False), encoding='utf-8')
+    return shared
+
+
 def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.ndarray, float, str]:
-    """Run sim bridge + gait nodes; return sample times (s after the start), poses (T, N, 3), RTF."""
+    """Run sim.launch.xml and listen; return sample times (s after the start), poses (T, N, 3), RTF, trouble."""
     import os
 
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
     from geometry_msgs.msg import PoseArray
     from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from smarticle_bags.metadata import read_metadata
     from smarticle_common import topics
+    from smarticle_common.launching import DomainReservation, isolated_ros_env
     from smarticle_common.messages import planar_poses
-    from smarticle_bags.recording import start_recording
-    from smarticle_common.launching import DomainReservation, ProcessGroup, isolated_ros_env
 
-    from smarticle_sim.bridge import BridgeSettings
+    from .launch_files import package_share, resolve
+    from .launcher import Launch
 
     reservation = None if 'ROS_DOMAIN_ID' in os.environ else DomainReservation()
     env = isolated_ros_env(reservation.domain_id if reservation else None)
     os.environ.update({k: env[k] for k in ('ROS_DOMAIN_ID', 'ROS_AUTOMATIC_DISCOVERY_RANGE')})
-    period = GAIT_PERIOD
-    duration = START_AT + args.periods * period
+    log_dir.mkdir(parents=True, exist_ok=True)
+    params = log_dir.parent / 'params.yaml'
+    shared = write_params(args, params)
+    start_at, period = shared['start_at'], shared['period']
+    duration = start_at + args.periods * period
     samples: dict[int, np.ndarray] = {}
 
     def on_poses(msg: Any) -> None:
@@ -94,6 +134,15 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
     def on_gliders(msg: Any) -> None:
         live['gliders'] = msg
 
+    bag = log_dir.parent / 'bag'
+    if bag.exists():
+        shutil.rmtree(bag)  # the previous demo run's bag
+    listeners = 3 + (1 if args.view else 0)   # the monitor, the recorder, this demo (and the live view)
+    plan = resolve(package_share('smarticle_bringup') / 'launch' / 'sim.launch.xml', {
+        'robots': str(args.robots), 'scene': args.scene, 'seed': str(args.seed), 'duration': repr(float(duration)),
+        'feedback': str(args.feedback).lower(), 'composed': str(not args.separate).lower(),
+        'wait_for_subscribers': str(listeners), 'record': 'true', 'bag': str(bag),
+        'view': str(args.view).lower(), 'view_port': str(args.view_port), 'params_file': str(params)})
     rclpy.init()
     node = rclpy.create_node('demo_listener')
     deep = QoSProfile(depth=5000, reliability=ReliabilityPolicy.BEST_EFFORT)  # keep every sample we are sent
@@ -110,71 +159,53 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
         for k in range(args.robots):
             node.create_subscription(Header, topics.topic('halt', k), functools.partial(count_halt, k),
                                      topics.qos_profile(topics.spec_of('halt').qos))
-    bag = log_dir.parent / 'bag'
-    if bag.exists():
-        shutil.rmtree(bag)  # the previous demo run's bag
+    launch = Launch(plan, log_dir, env)
     try:
-        with ProcessGroup(log_dir, env) as group:
-            # every node takes the start time as a parameter, so the start cannot race the first /clock
-            common = ['-p', f'alpha_max_deg:={args.alpha_max}', '-p', f'period:={period}',
-                      '-p', f'start_at:={START_AT}']
-            scene = {'robots': args.robots, 'scene': args.scene, 'seed': args.seed, 'phase_jitter': args.phase_jitter}
-            scene_args = [arg for key, value in scene.items() for arg in ('-p', f'{key}:={value}')]
-            robots = BridgeSettings.defaults(alpha_max_deg=args.alpha_max, **scene).scene().robots  # their phases
-            for k in range(args.robots):
-                gait = robots[k].gait
-                phase = gait.phase if gait is not None else 0.0
-                namespace = ['-r', f'__ns:={topics.robot_namespace(k)}']   # /smarticle_k/gait, robot k
-                group.start('gait', '--ros-args', *namespace, '-p', 'lockstep:=true',
-                            '-p', 'use_sim_time:=true', '-p', f'phase:={phase!r}', *common)
-                if args.feedback:
-                    group.start('feedback', '--ros-args', *namespace, '-p', 'use_sim_time:=true',
-                                '-p', f'period:={period}', '-p', f'phase:={phase!r}', '-p', f'start_at:={START_AT}')
-            group.start('glider_monitor', '--ros-args', '-p', 'use_sim_time:=true', '-p', f't0:={START_AT}',
-                        '-p', f'min_periods:={args.min_periods}', '-p', 'show_arms:=false')
-            recording = start_recording(group, bag, [topics.topic(key) for key in RECORDED])
-            recording.wait_subscribed(timeout=30.0)
-            bridge = group.start('sim_bridge', '--ros-args', *scene_args,
-                                 '-p', f'duration:={duration}', '-p', 'wait_for_subscribers:=3', *common)
-            feedback = f'{args.robots} feedback nodes + ' if args.feedback else ''
-            print(f'[demo] sim bridge + {args.robots} gait nodes + {feedback}glider monitor + recorder started (domain '
-                  f'{env["ROS_DOMAIN_ID"]}, logs in {log_dir}); simulating {args.periods:g} periods = '
-                  f'{duration:.1f} s', flush=True)
-            wall0 = time.monotonic()
-            last = wall0
-            graph: list[str] = []
-            expected_nodes = args.robots * (2 if args.feedback else 1) + 4   # + bridge, monitor, recorder, us
-            while bridge.poll() is None:
-                rclpy.spin_once(node, timeout_sec=0.05)
-                if samples and len(graph) < expected_nodes:     # keep the fullest view of the graph
-                    now_seen = [f'{ns.rstrip("/")}/{name}' for name, ns in node.get_node_names_and_namespaces()]
-                    graph = now_seen if len(now_seen) > len(graph) else graph
-                if time.monotonic() - last > 5.0 and samples:
-                    last = time.monotonic()
-                    sim = max(samples) * 1e-9
-                    print(f'[demo] sim time {sim:6.1f} / {duration:.1f} s  ({sim / duration:4.0%}), '
-                          f'{sim / (last - wall0):.1f}x real time', flush=True)
-            for _ in range(20):
-                rclpy.spin_once(node, timeout_sec=0.02)
-            wall = time.monotonic() - wall0
-            trouble = ''
-            if bridge.returncode == SIM_TROUBLE_EXIT:   # the physics stopped: keep what arrived, say why
-                lines = [line for line in group.output(bridge).splitlines() if 'sim trouble' in line]
-                trouble = lines[-1].split('sim trouble: ', 1)[-1] if lines else 'sim trouble'
-            elif bridge.returncode != 0:
-                raise RuntimeError(f'sim bridge exited with code {bridge.returncode}:\n'
-                                   + group.output(bridge)[-2000:])
-            info = recording.stop()
-            print(f'[demo] recorded {info.message_count} messages of {len(info.topics)} topics to {bag} '
-                  f'(smarticle-bag info {bag})')
-            if args.feedback:
-                print('[demo] feedback halts per robot: ' + ', '.join(f'{k}: {n}' for k, n in enumerate(halts)))
-            report_graph(graph, log_dir.parent / 'nodes.txt')
-            report = live.get('gliders')
-            pairs = [status.name for status in report.status] if report is not None else []
-            print(f'[demo] live glider monitor, last report: {len(pairs)} bound pair(s) '
-                  + (', '.join(pairs) if pairs else ''))
+        launch.start()
+        driver = next(r for r in launch.running if r.node.on_exit_shutdown)   # the sim bridge, or its host
+        feedback = f'{args.robots} feedback nodes + ' if args.feedback else ''
+        how = 'as separate processes' if args.separate else 'composed in one process (smarticle-compose)'
+        print(f'[demo] sim.launch.xml: sim bridge + {args.robots} gait nodes + {feedback}glider monitor {how}, '
+              f'+ recorder{" + live view on ws://localhost:" + str(args.view_port) if args.view else ""} '
+              f'(domain {env["ROS_DOMAIN_ID"]}, logs in {log_dir}); simulating {args.periods:g} periods = '
+              f'{duration:.1f} s', flush=True)
+        wall0 = time.monotonic()
+        last = wall0
+        graph: list[str] = []
+        expected_nodes = args.robots * (2 if args.feedback else 1) + 4 + (1 if args.view else 0)
+        while driver.proc.poll() is None:
+            rclpy.spin_once(node, timeout_sec=0.05)
+            if samples and len(graph) < expected_nodes:     # keep the fullest view of the graph
+                now_seen = [f'{ns.rstrip("/")}/{name}' for name, ns in node.get_node_names_and_namespaces()]
+                graph = now_seen if len(now_seen) > len(graph) else graph
+            if time.monotonic() - last > 5.0 and samples:
+                last = time.monotonic()
+                sim = max(samples) * 1e-9
+                print(f'[demo] sim time {sim:6.1f} / {duration:.1f} s  ({sim / duration:4.0%}), '
+                      f'{sim / (last - wall0):.1f}x real time', flush=True)
+        for _ in range(20):
+            rclpy.spin_once(node, timeout_sec=0.02)
+        wall = time.monotonic() - wall0
+        trouble = ''
+        code = driver.proc.returncode
+        if code == SIM_TROUBLE_EXIT:   # the physics stopped: keep what arrived, say why
+            lines = [line for line in launch.output(driver).splitlines() if 'sim trouble' in line]
+            trouble = lines[-1].split('sim trouble: ', 1)[-1] if lines else 'sim trouble'
+        elif code != 0:
+            raise RuntimeError(f'{driver.node.full_name} exited with code {code}:\n' + launch.output(driver)[-2000:])
+        launch.stop()                                  # SIGINT: the recorder closes the bag
+        info = read_metadata(bag)
+        print(f'[demo] recorded {info.message_count} messages of {len(info.topics)} topics to {bag} '
+              f'(smarticle-bag info {bag})')
+        if args.feedback:
+            print('[demo] feedback halts per robot: ' + ', '.join(f'{k}: {n}' for k, n in enumerate(halts)))
+        report_graph(graph, log_dir.parent / 'nodes.txt')
+        report = live.get('gliders')
+        pairs = [status.name for status in report.status] if report is not None else []
+        print(f'[demo] live glider monitor, last report: {len(pairs)} bound pair(s) '
+              + (', '.join(pairs) if pairs else ''))
     finally:
+        launch.stop()
         node.destroy_node()
         rclpy.try_shutdown()
         if reservation is not None:
@@ -182,7 +213,7 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
     stamps = np.array(sorted(samples))
     poses = np.array([samples[s] for s in stamps])
     rtf = (stamps[-1] * 1e-9) / wall if len(stamps) else 0.0
-    return stamps * 1e-9 - START_AT, poses, rtf, trouble
+    return stamps * 1e-9 - start_at, poses, rtf, trouble
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -23,6 +23,7 @@ Times are plain seconds from any clock (wall or simulated) and must not go backw
 from __future__ import annotations
 
 import math
+import dataclasses
 from dataclasses import dataclass
 
 from .facts import GAIT_PERIOD, SERVO_SPEED
@@ -97,6 +98,7 @@ class SquareGait:
     def __init__(self, config: GaitConfig) -> None:
         self.config = config
         self._start_time: float | None = None
+        self._pending: GaitConfig | None = None
         self._reset()
 
     def _reset(self) -> None:
@@ -115,6 +117,25 @@ class SquareGait:
         return self._start_time
 
     @property
+    def pending(self) -> GaitConfig | None:
+        """A config waiting for the next period boundary (``set_alpha_max``), or None."""
+        return self._pending
+
+    def set_alpha_max(self, alpha_max: float) -> None:
+        """Change the amplitude (rad) from the next period boundary of gait time on (at once before the start).
+
+        The arms finish the current period on the old square and then head for the corners of the new one,
+        so the change never jumps. GaitError (nothing changes) if the amplitude is out of range or its
+        stroke no longer fits a quarter period at the servo speed.
+        """
+        config = dataclasses.replace(self.config, alpha_max=alpha_max)    # checked by GaitConfig
+        if self._start_time is None:
+            self.config, self._pending = config, None
+            self._reset()
+        else:
+            self._pending = config
+
+    @property
     def halted(self) -> bool:
         """True while the arms hold after a halt."""
         return self._halted
@@ -124,6 +145,8 @@ class SquareGait:
         if not math.isfinite(t0):
             raise GaitError(f'start time must be finite, got {t0!r}')
         self._start_time = float(t0)
+        if self._pending is not None:
+            self.config, self._pending = self._pending, None
         self._reset()
 
     def gait_time(self, t: float) -> float:
@@ -178,6 +201,8 @@ class SquareGait:
                 self._pos0 = self._position(boundary)
             self._quarter_count += 1
             self._tau_event = boundary
+            if self._pending is not None and self._quarter_count % 4 == 0:   # a new period: new amplitude
+                self.config, self._pending = self._pending, None
 
     def _position(self, tau: float) -> tuple[float, float]:
         """Reference arm angles at gait time ``tau`` within the current quarter."""

@@ -15,7 +15,9 @@ from typing import IO
 
 
 def executable(name: str) -> str:
-    """Return the path of an installed console script (node or CLI) of the project."""
+    """Return the path of an installed console script (node or CLI) of the project (or ``name`` if a path)."""
+    if os.path.isabs(name) and os.access(name, os.X_OK):
+        return name
     path = Path(sys.executable).parent / name
     if path.exists():
         return str(path)
@@ -74,7 +76,7 @@ class ProcessGroup:
 
     def start(self, name: str, *args: str, env: dict[str, str] | None = None) -> subprocess.Popen[bytes]:
         """Start executable ``name`` with ``args``; its output goes to ``<log_dir>/<name>-<i>.log``."""
-        log = self.log_dir / f'{name}-{len(self.procs)}.log'
+        log = self.log_dir / f'{Path(name).name}-{len(self.procs)}.log'
         handle = open(log, 'wb')
         merged = {**(self.env or os.environ), **(env or {})}
         proc = subprocess.Popen([executable(name), *args], stdout=handle, stderr=subprocess.STDOUT,

@@ -14,7 +14,7 @@ from typing import Any, TypeVar
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult
 from rclpy.exceptions import InvalidParameterTypeException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
@@ -80,6 +80,44 @@ def read_config(node: Any, specs: tuple[ParamSpec, ...], build: Callable[[dict[s
         raise
     except ValueError as err:
         raise ParameterError(f'node {node.get_name()}: {err}') from err
+
+
+def accept_runtime_changes(node: Any, specs: tuple[ParamSpec, ...],
+                           apply: Callable[[dict[str, Any]], None]) -> None:
+    """Let ``ros2 param set`` change the parameters of ``specs`` marked ``runtime``; refuse everything else.
+
+    Registers a set-parameters callback (call it after ``read_config``: rclpy runs these callbacks for
+    declarations too). A change of a parameter that is not ``runtime`` is refused as read-only, a value
+    of the wrong type or out of range with the bound it breaks, and a set the node cannot use
+    (``apply`` raises ValueError, e.g. a window whose minimum exceeds its maximum) with that reason; in
+    every refused case the node is unchanged. ``apply`` gets the checked new values by name and must
+    take them all or raise. Parameters outside ``specs`` (``use_sim_time``) are left to rclpy.
+    """
+    by_name = {spec.name: spec for spec in specs}
+    where = f'node {node.get_name()} parameter'
+
+    def on_set(params: list[Parameter]) -> SetParametersResult:
+        changes: dict[str, Any] = {}
+        for param in params:
+            spec = by_name.get(param.name)
+            if spec is None:
+                continue
+            if not spec.runtime:
+                return SetParametersResult(successful=False, reason=f'{param.name} is read-only: it is read once '
+                                           'at start-up; restart the node to change it')
+            try:
+                changes[param.name] = spec.check(param.value, where)
+            except ParameterError as err:
+                return SetParametersResult(successful=False, reason=str(err))
+        if changes:
+            try:
+                apply(changes)
+            except ValueError as err:
+                return SetParametersResult(successful=False, reason=f'{where}s {", ".join(changes)}: {err}')
+            node.get_logger().info('parameters changed: ' + ', '.join(f'{k} = {v!r}' for k, v in changes.items()))
+        return SetParametersResult(successful=True)
+
+    node.add_on_set_parameters_callback(on_set)
 
 
 def resolve_robot_id(node: Any, robot_id: int) -> int:

@@ -32,6 +32,12 @@ ROBOT_NAMESPACE = 'smarticle_{k}'
 #: Largest robot id the contract accepts (ids are 0 .. MAX_ROBOT_ID).
 MAX_ROBOT_ID = 999
 
+#: An unseen robot in ``/smarticles/poses`` (and its ``/smarticle_<k>/pose``): position (0, 0, UNSEEN_Z),
+#: identity orientation. Every value is finite and the quaternion normalised, so RViz and Foxglove accept
+#: the message (RViz refuses a PoseArray with a NaN anywhere); a seen robot always has z = 0, so z =
+#: UNSEEN_Z (one metre under the plate) can only mean "not seen in this sample", never a stale pose.
+UNSEEN_Z = -1.0
+
 
 class Qos(Enum):
     """Named QoS kinds of the stack (see ``qos_profile``)."""
@@ -123,7 +129,8 @@ TOPICS: tuple[TopicSpec, ...] = (
               'overhead_camera', 'pixels', 'camera driver or sim', 'intrinsics of the overhead camera'),
     TopicSpec('poses', '/smarticles/poses', 'geometry_msgs/msg/PoseArray', Qos.SENSOR,
               ARENA_FRAME, 'm, quaternion', 'tracker, or sim without camera',
-              'planar poses of all robots, index = robot id; a missing robot has NaN position'),
+              'planar poses of all robots, index = robot id; a robot not seen is at (0, 0, -1) with identity '
+              'orientation (UNSEEN_Z)'),
     TopicSpec('gliders', '/smarticles/gliders', 'diagnostic_msgs/msg/DiagnosticArray', Qos.COMMAND,
               '', 'm, rad, s', 'glider monitor',
               'one status per bound pair: ids, r, theta, phi, class C1/C2, age'),

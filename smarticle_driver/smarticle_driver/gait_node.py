@@ -7,6 +7,7 @@ and ``/smarticle_<k>/halt``. All timing uses the node's clock, so ``use_sim_time
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from rclpy.node import Node
@@ -15,14 +16,15 @@ from rclpy.time import Time
 from smarticle_common import topics
 from smarticle_common.facts import GAIT_PERIOD, SERVO_SPEED
 from smarticle_common.gait import GaitCommand, GaitConfig, SquareGait, board_time
-from smarticle_common.node import read_config, resolve_robot_id, run_node
+from smarticle_common.node import accept_runtime_changes, read_config, resolve_robot_id, run_node
 from smarticle_common.params import ROBOT_ID_PARAM, ParameterError, ParamSpec
 
 NODE_NAME = 'gait'
 
 PARAMS: tuple[ParamSpec, ...] = (
     ROBOT_ID_PARAM,
-    ParamSpec('alpha_max_deg', 90.0, 'square-gait amplitude alpha_max in degrees (5 to 120)', 5.0, 120.0),
+    ParamSpec('alpha_max_deg', 90.0, 'square-gait amplitude alpha_max in degrees (5 to 120); a change at run '
+              'time takes effect at the next gait period', 5.0, 120.0, runtime=True),
     ParamSpec('period', GAIT_PERIOD, 'gait period T in seconds', 0.05, 60.0),
     ParamSpec('servo_speed', SERVO_SPEED, 'servo speed limit in rad/s', 0.1, 100.0),
     ParamSpec('phase', 0.0, 'phase offset as a fraction of a period, in [0, 1)', 0.0, 0.999999),
@@ -51,8 +53,9 @@ def config_from_params(values: dict[str, Any]) -> GaitConfig:
 class GaitNode(Node):
     """Thin ROS shell around smarticle_common.gait.SquareGait."""
 
-    def __init__(self) -> None:
-        super().__init__(NODE_NAME)
+    def __init__(self, **node_options: Any) -> None:
+        """Build the node; ``node_options`` go to rclpy's Node (a composing host's ``cli_args``)."""
+        super().__init__(NODE_NAME, **node_options)
         config, values = read_config(self, PARAMS, lambda v: (config_from_params(v), v))
         self.robot_id = resolve_robot_id(self, values['robot_id'])
         self.gait = SquareGait(config)
@@ -82,11 +85,17 @@ class GaitNode(Node):
                                      topics.qos_profile(clock.qos))
         else:
             self.timer = self.create_timer(1.0 / values['tick_rate'], self.on_tick)
+        accept_runtime_changes(self, PARAMS, self.on_parameters)
         waiting = ('starting at once' if self.autostart else f'starting at t = {self.start_at:g} s'
                    if self.start_at >= 0.0 else f'waiting for {start.resolve()}')
         self.get_logger().info(
             f'robot {self.robot_id}: alpha_max {values["alpha_max_deg"]:g} deg, '
             f'period {values["period"]:g} s, phase {values["phase"]:g}; {waiting}')
+
+    def on_parameters(self, changes: dict[str, Any]) -> None:
+        """Apply a run-time change: the new amplitude from the next gait period on (GaitError if unusable)."""
+        if 'alpha_max_deg' in changes:
+            self.gait.set_alpha_max(math.radians(changes['alpha_max_deg']))
 
     def now(self) -> Time:
         """Return the node clock's time, never earlier than a time already handed to the gait.

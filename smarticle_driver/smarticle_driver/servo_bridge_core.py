@@ -71,6 +71,9 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec('reconnect_max', 2.0, 'longest wait (s) between reopen attempts', 0.01, 600.0),
     ParamSpec('diagnostics_period', 1.0, 'seconds between /diagnostics messages and board error polls',
               0.1, 60.0),
+    ParamSpec('autostart', True, 'bring the lifecycle node to active by itself: configure (open the port, '
+              'retried every reconnect_max seconds until it opens) then activate; false = wait for '
+              'lifecycle transitions (ros2 lifecycle set)'),
 )
 
 
@@ -94,6 +97,7 @@ class BridgeConfig:
     reconnect_initial: float = 0.1
     reconnect_max: float = 2.0
     diagnostics_period: float = 1.0
+    autostart: bool = True
 
     def __post_init__(self) -> None:
         channels = self.servo_channels + self.fsr_channels
@@ -123,7 +127,7 @@ class BridgeConfig:
                    servo_calibration_file=values['servo_calibration_file'],
                    fsr_calibration_file=values['fsr_calibration_file'], reply_timeout=values['reply_timeout'],
                    reconnect_initial=values['reconnect_initial'], reconnect_max=values['reconnect_max'],
-                   diagnostics_period=values['diagnostics_period'])
+                   diagnostics_period=values['diagnostics_period'], autostart=values['autostart'])
 
     def servo_calibration_path(self) -> Path:
         """Return the servo calibration file to load (the package default when none is set)."""
@@ -205,6 +209,11 @@ class _Joint:
         self.model = SlewModel()               # pulse (us) over time, at the board's speed limit
 
 
+def load_calibration(config: BridgeConfig) -> tuple[dict[str, ServoCalibration], dict[str, FsrModel]]:
+    """Read the servo and FSR calibration files of ``config`` (CalibrationError names file and field)."""
+    return load_servo_calibration(config.servo_calibration_path()), load_fsr_calibration(config.fsr_calibration_path())
+
+
 class ServoBridgeCore:
     """Joint commands in, Maestro bytes out; slew-model joint states and FSR newtons back."""
 
@@ -226,15 +235,43 @@ class ServoBridgeCore:
         #: Serialises the board and all the state above; held for one board transaction at a time.
         self.lock: AbstractContextManager[Any] = threading.Lock()
         self._closed = False
+        #: The port state the last step reported: a loss found by any thread (a command, the error poll)
+        #: is reported once, by the next step.
+        self._reported_open = False
 
     @classmethod
-    def from_config(cls, config: BridgeConfig) -> ServoBridgeCore:
-        """Load the calibration files and build the link and board (the port opens on the first step)."""
-        servos = load_servo_calibration(config.servo_calibration_path())
-        fsrs = load_fsr_calibration(config.fsr_calibration_path())
+    def from_config(cls, config: BridgeConfig,
+                    calibration: tuple[dict[str, ServoCalibration], dict[str, FsrModel]] | None = None
+                    ) -> ServoBridgeCore:
+        """Build the link and board (the port opens on ``open`` or the first step), loading the calibration
+        files unless ``calibration`` (from ``load_calibration``) is given."""
+        servos, fsrs = calibration or load_calibration(config)
         link = SerialLink(config.port, config.baud, config.reply_timeout, config.reconnect_initial,
                           config.reconnect_max)
         return cls(config, servos, fsrs, link, make_board(config.board, link))
+
+    def open(self, now: float) -> tuple[bool, list[str]]:
+        """Open the port now and seed the joint models from the board's pulses: (opened, warnings).
+
+        The lifecycle node's configure: False (with the port's error) when the port cannot be opened.
+        """
+        with self.lock:
+            if self.link.is_open:
+                return True, []
+            if self.link.poll():
+                self._reported_open = True
+                return True, self._on_open(now)
+            return False, [self.link.last_error]
+
+    def hold(self, now: float) -> list[str]:
+        """Hold the arms where they are now (the lifecycle node's deactivate); warnings if the port failed."""
+        with self.lock:
+            for joint in self.joints:
+                if joint.model.known:
+                    joint.target = joint.cal.pulse_to_angle(joint.model.position(now))
+            self.holding = True
+            error = self._sync(now)
+        return [error] if error else []
 
     def handle_command(self, names: Sequence[str], positions: Sequence[float], velocities: Sequence[float],
                        now: float) -> list[str]:
@@ -270,7 +307,6 @@ class ServoBridgeCore:
         with self.lock:
             if self._closed:
                 return result
-            was_open = self.link.is_open
             if self.link.poll():
                 result.events.append(f'port {self.link.port} opened')
                 result.warnings.extend(self._on_open(now))
@@ -281,9 +317,10 @@ class ServoBridgeCore:
             result.fsr_counts = tuple(counts)
             result.fsr_newtons = tuple(m.newtons(c) for m, c in zip(self.fsrs, counts, strict=True))
         with self.lock:
-            if was_open and not self.link.is_open:
+            if self._reported_open and not self.link.is_open:
                 result.events.append(f'port {self.link.port} lost ({self.link.last_error}); '
                                      'reopening with back-off')
+            self._reported_open = self.link.is_open
             if self.link.is_open and all(j.model.known for j in self.joints):
                 result.joint_positions = tuple(j.cal.pulse_to_angle(j.model.position(now)) for j in self.joints)
                 result.joint_velocities = tuple(j.model.velocity(now) / j.cal.us_per_rad for j in self.joints)
@@ -343,9 +380,12 @@ class ServoBridgeCore:
             level = Level.ERROR
             message = (f'port {link.port} down ({link.last_error}); '
                        f'next attempt in {link.seconds_to_retry():.2f} s')
-        elif self.holding:
+        elif self.holding and age is not None and age > self.config.watchdog_timeout:
             level = Level.WARN
             message = f'watchdog: no joint command for {age:.2f} s, arms held'
+        elif self.holding:
+            level = Level.OK
+            message = 'port open, arms held'
         elif new_reply_errors:
             level = Level.WARN
             message = f'{new_reply_errors} bad board replies since the last report ({self.last_reply_error})'

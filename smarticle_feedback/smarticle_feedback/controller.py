@@ -167,6 +167,17 @@ class ImpactController:
         self._last_halt_time = -math.inf
         self._reset_runs(None)
 
+    def set_windows(self, config: FeedbackConfig) -> None:
+        """Use the impact windows (and debounce) of ``config`` from the next sample on; the rest must not change.
+
+        The start time, halts and counters are kept; FeedbackConfigError if the period or phase differ
+        (they align the controller with the gait and are fixed while it runs).
+        """
+        if (config.period, config.phase) != (self.config.period, self.config.phase):
+            raise FeedbackConfigError('period and phase cannot change while the controller runs')
+        self.config = config
+        self._reset_runs(self._run_period)
+
     def period_index(self, t: float) -> int | None:
         """Gait period of time ``t`` (whole periods of gait time), or None without a start."""
         if self.start_time is None:

@@ -14,7 +14,8 @@ import rclpy
 from rclpy.node import Node
 from rclpy.time import Time
 from smarticle_common import topics
-from smarticle_common.node import OK, WARN, DiagnosticsPublisher, read_config, resolve_robot_id, run_node
+from smarticle_common.node import (OK, WARN, DiagnosticsPublisher, accept_runtime_changes, read_config,
+                                   resolve_robot_id, run_node)
 from smarticle_common.params import ParameterError
 
 from .controller import ImpactController, check_sample
@@ -30,8 +31,9 @@ def _msg(key: str) -> Any:
 class FeedbackNode(Node):
     """Thin ROS shell around smarticle_feedback.controller.ImpactController."""
 
-    def __init__(self) -> None:
-        super().__init__(NODE_NAME)
+    def __init__(self, **node_options: Any) -> None:
+        """Build the node; ``node_options`` go to rclpy's Node (a composing host's ``cli_args``)."""
+        super().__init__(NODE_NAME, **node_options)
         config, values = read_config(self, PARAMS, lambda v: (config_from_values(v), v))
         self.robot_id = resolve_robot_id(self, values['robot_id'])
         self.controller = ImpactController(config)
@@ -47,11 +49,19 @@ class FeedbackNode(Node):
         self.create_subscription(_msg('fsr'), topics.topic('fsr', self.robot_id), self.on_fsr, qos['fsr'])
         self.create_subscription(self.Header, topics.topic('start'), self.on_start, qos['start'])
         self.create_timer(values['diagnostics_period'], self.publish_diagnostics, clock=rclpy.clock.Clock())
+        self.values = values
+        accept_runtime_changes(self, PARAMS, self.on_parameters)
         cfg = self.controller.config
         self.get_logger().info(
             f'robot {self.robot_id}: faces {", ".join(cfg.enabled_faces) or "none"}; windows '
             + ', '.join(f'[{w.f_min:g}, {w.f_max:g}] N' for w in cfg.windows)
             + f'; debounce {cfg.debounce}; period {cfg.period:g} s')
+
+    def on_parameters(self, changes: dict[str, Any]) -> None:
+        """Apply new impact windows at once (ParameterError, nothing changed, if they contradict each other)."""
+        values = {**self.values, **changes}
+        self.controller.set_windows(config_from_values(values))
+        self.values = values
 
     def on_start(self, msg: Any) -> None:
         """Take the gait start time (a zero stamp means now, as for the gait node)."""

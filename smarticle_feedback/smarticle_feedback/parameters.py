@@ -2,7 +2,8 @@
 
 No rclpy here: tests, the batch experiments and the node all build the same ``FeedbackConfig`` from
 these values. One window per FSR face (``<face>_min``, ``<face>_max``, ``<face>_enabled``) so faces can
-be enabled one at a time; the default window is the one calibrated from simulated C2 collisions of the
+be enabled one at a time; the windows and the debounce may change at run time (``ros2 param set``,
+applied from the next sample on); the default window is the one calibrated from simulated C2 collisions of the
 ``feedback`` robot (docs/feedback.md).
 """
 
@@ -28,9 +29,11 @@ def _face_params() -> tuple[ParamSpec, ...]:
     specs: list[ParamSpec] = []
     for face in topics.FSR_FACES:
         specs += [
-            ParamSpec(f'{face}_min', DEFAULT_F_MIN, f'impact window of {face}: lowest force (N)', 0.0, 1000.0),
-            ParamSpec(f'{face}_max', DEFAULT_F_MAX, f'impact window of {face}: highest force (N)', 0.0, 1000.0),
-            ParamSpec(f'{face}_enabled', True, f'whether an impact on {face} halts the arms'),
+            ParamSpec(f'{face}_min', DEFAULT_F_MIN, f'impact window of {face}: lowest force (N)', 0.0, 1000.0,
+                      runtime=True),
+            ParamSpec(f'{face}_max', DEFAULT_F_MAX, f'impact window of {face}: highest force (N)', 0.0, 1000.0,
+                      runtime=True),
+            ParamSpec(f'{face}_enabled', True, f'whether an impact on {face} halts the arms', runtime=True),
         ]
     return tuple(specs)
 
@@ -39,7 +42,7 @@ PARAMS: tuple[ParamSpec, ...] = (
     ROBOT_ID_PARAM,
     *_face_params(),
     ParamSpec('debounce_samples', 1, 'consecutive FSR samples of one face inside its window that make an '
-              'impact', 1, 1000),
+              'impact', 1, 1000, runtime=True),
     ParamSpec('period', GAIT_PERIOD, "gait period T (s): use the gait node's period; at most one halt "
               'per period', 0.05, 60.0),
     ParamSpec('phase', 0.0, "gait phase of this robot (fraction of a period): use the gait node's phase",

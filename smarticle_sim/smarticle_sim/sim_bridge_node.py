@@ -43,8 +43,9 @@ SUBSCRIBER_SETTLE = 0.5
 class SimBridgeNode(Node):
     """Thin ROS shell around SimBridgeCore."""
 
-    def __init__(self) -> None:
-        super().__init__(NODE_NAME)
+    def __init__(self, **node_options: Any) -> None:
+        """Build the node; ``node_options`` go to rclpy's Node (a composing host's ``cli_args``)."""
+        super().__init__(NODE_NAME, **node_options)
         self.settings = read_config(self, PARAMS, BridgeSettings.from_values)
         try:
             self.core = SimBridgeCore(self.settings)

@@ -1,10 +1,10 @@
 """ROS node `glider_monitor`: live bound pairs from /smarticles/poses, for operators and RViz/Foxglove.
 
-Subscribes ``/smarticles/poses`` (index = robot id; NaN position = not seen; yaw = heading of the body
-normal) and, with ``show_arms``, ``/smarticle_<k>/joint_states``. Feeds ``GliderMonitor`` (all maths
-there) and publishes, every ``publish_period`` of message time, ``/smarticles/gliders`` (one
-DiagnosticStatus per bound pair) and ``/smarticles/markers`` (robot outlines and glider bonds, from
-``markers.scene_markers``). Faults go to ``/diagnostics``. See docs/tracking.md.
+Subscribes ``/smarticles/poses`` (index = robot id; the unseen pose of ``topics.UNSEEN_Z`` = not seen;
+yaw = heading of the body normal) and, with ``show_arms``, ``/smarticle_<k>/joint_states``. Feeds
+``GliderMonitor`` (all maths there) and publishes, every ``publish_period`` of message time,
+``/smarticles/gliders`` (one DiagnosticStatus per bound pair) and ``/smarticles/markers`` (robot
+outlines and glider bonds, from ``markers.scene_markers``). Faults go to ``/diagnostics``. See docs/tracking.md.
 """
 
 from __future__ import annotations
@@ -77,8 +77,9 @@ def marker_message(shape: MarkerShape, header: Any) -> Marker:
 class GliderMonitorNode(Node):
     """Thin ROS shell around GliderMonitor and scene_markers."""
 
-    def __init__(self) -> None:
-        super().__init__(MONITOR_NODE)
+    def __init__(self, **node_options: Any) -> None:
+        """Build the node; ``node_options`` go to rclpy's Node (a composing host's ``cli_args``)."""
+        super().__init__(MONITOR_NODE, **node_options)
         self.settings = read_config(self, MONITOR_PARAMS, monitor_settings)
         self.monitor = GliderMonitor(self.settings.glider, self.settings.t0, self.settings.history)
         qos = {key: topics.qos_profile(topics.spec_of(key).qos) for key in topics.BY_KEY}

@@ -57,7 +57,8 @@ MONITOR_PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec('class_tolerance_deg', 45.0, 'C1 if the mean phi is within this of 180 deg, C2 of 0 deg',
               0.1, 90.0),
     ParamSpec('body_length', BODY_LENGTH, 'BL = W (m): the unit of r_bl in the reports', 1e-4, 10.0),
-    ParamSpec('t0', -1.0, 'start of period 0 (s, message time); negative = the first frame', -1.0, 1e9),
+    ParamSpec('start_at', -1.0, "start of period 0 (s, message time): the gait nodes' start_at (the shared "
+              'stack.yaml gives both); negative = the first frame', -1.0, 1e9),
     ParamSpec('history', 100, 'finished gliders kept', 1, 100000),
     ParamSpec('publish_period', 0.1, 'message-time seconds between reports (0 = every frame)', 0.0, 3600.0),
     ParamSpec('show_arms', True, 'subscribe to /smarticle_<k>/joint_states and draw the arms'),
@@ -117,7 +118,7 @@ def monitor_settings(values: dict[str, Any]) -> MonitorSettings:
                           class_tolerance=math.radians(values['class_tolerance_deg']),
                           body_length=values['body_length'], width=values['body_length'])
     dims = RobotDims(values['body_width'], values['body_depth'], values['arm_length'], values['arm_thickness'])
-    return MonitorSettings(glider, None if values['t0'] < 0.0 else values['t0'], values['history'],
+    return MonitorSettings(glider, None if values['start_at'] < 0.0 else values['start_at'], values['history'],
                            values['publish_period'], values['show_arms'], dims)
 
 

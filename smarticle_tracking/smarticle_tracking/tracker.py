@@ -11,7 +11,8 @@ Speed: tags are searched on a copy of the frame shrunk by a whole factor (while 
 ``detection_tag_px`` pixels) and their corners refined on the full-size frame; only when a robot's tag is
 not found that way is the full-size frame searched as well.
 
-Missing robots: a robot whose tag is not found (or is rejected) gets a NaN pose, never an old one.
+Missing robots: a robot whose tag is not found (or is rejected) gets a NaN pose, never an old one (the node
+publishes it as the contract's unseen pose, ``topics.UNSEEN_Z``).
 """
 
 from __future__ import annotations

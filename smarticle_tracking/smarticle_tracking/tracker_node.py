@@ -2,9 +2,10 @@
 
 Subscribes ``/overhead_camera/image_raw`` and ``/overhead_camera/camera_info``; every frame gives
 exactly one PoseArray (index = robot id) stamped with the frame's stamp: a robot whose tag was not
-found, or was rejected, gets a NaN position (never an old pose), and so does every robot of a frame the
-tracker cannot use (unsupported encoding, wrong size for the calibration, no calibration). Problems
-are logged (throttled) and counted on /diagnostics; the node keeps running. See docs/tracking.md.
+found, or was rejected, gets the unseen pose (``topics.UNSEEN_Z``: finite, so RViz accepts the message;
+never an old pose), and so does every robot of a frame the tracker cannot use (unsupported encoding,
+wrong size for the calibration, no calibration). Problems are logged (throttled) and counted on
+/diagnostics; the node keeps running. See docs/tracking.md.
 """
 
 from __future__ import annotations
@@ -31,8 +32,9 @@ from .tracker import TagTracker, image_from_buffer
 class TrackerNode(Node):
     """Thin ROS shell around TagTracker."""
 
-    def __init__(self) -> None:
-        super().__init__(TRACKER_NODE)
+    def __init__(self, **node_options: Any) -> None:
+        """Build the node; ``node_options`` go to rclpy's Node (a composing host's ``cli_args``)."""
+        super().__init__(TRACKER_NODE, **node_options)
         self.config, values = read_config(self, TRACKER_PARAMS, lambda v: (tracker_config(v), v))
         self.tracker: TagTracker | None = None
         self.calibration_problem = ''
@@ -86,7 +88,7 @@ class TrackerNode(Node):
             self.dist_coeffs = d if d.size and np.any(d != 0.0) else None
 
     def on_image(self, msg: Any) -> None:
-        """Track one frame and publish its poses (missing ones as NaN)."""
+        """Track one frame and publish its poses (missing ones as the unseen pose)."""
         self.counts['frames'] += 1
         n = self.config.n_robots
         poses = np.full((n, 3), np.nan)

@@ -197,3 +197,27 @@ def test_large_files_are_read_in_batches(tmp_path: Path, monkeypatch: pytest.Mon
     assert_same_poses(arrays.read_poses(batched), expected_poses)
     assert_same_joints(arrays.read_joints(batched, '/smarticle_0/joint_states'), expected_joints)
     assert not batched.chunk_cache.data  # nothing kept between calls when streaming
+
+
+def test_the_unseen_pose_reads_as_nan_on_both_paths(tmp_path: Path) -> None:
+    from smarticle_common import topics
+
+    def frame(i: int) -> bytes:
+        seen = [(0.1 * k, -0.05 * k, 0.0) for k in range(3)]
+        poses = [TYPES['geometry_msgs/msg/Pose'](
+            position=TYPES['geometry_msgs/msg/Point'](x=x, y=y, z=z),
+            orientation=TYPES['geometry_msgs/msg/Quaternion'](x=0.0, y=0.0, z=0.0, w=1.0))
+            for x, y, z in seen]
+        if i % 2:       # robot 1 not seen in odd frames: the contract's unseen pose
+            poses[1].position.x, poses[1].position.y, poses[1].position.z = 0.0, 0.0, topics.UNSEEN_Z
+        msg = TYPES['geometry_msgs/msg/PoseArray'](header=_header(i, 'arena'), poses=poses)
+        return bytes(STORE.serialize_cdr(msg, 'geometry_msgs/msg/PoseArray'))
+    with BagWriter(tmp_path / 'bag', WriterOptions(chunk_size=2000)) as writer:
+        writer.add_topic('/smarticles/poses', 'geometry_msgs/msg/PoseArray')
+        for i in range(20):
+            writer.write('/smarticles/poses', frame(i), T0 + i * 10_000_000)
+    reader = BagReader(tmp_path / 'bag')
+    fast, slow = arrays.read_poses(reader), arrays.read_poses(reader, columnar=False)
+    assert_same_poses(fast, slow)
+    assert np.all(np.isnan(fast.xyh[1::2, 1])) and np.all(np.isfinite(fast.xyh[0::2, 1]))
+    assert np.all(np.isfinite(fast.xyh[:, [0, 2]]))

@@ -23,11 +23,11 @@ def test_demo_runs_the_stack_and_writes_its_outputs(tmp_path: Path) -> None:
     assert data['time'][-1] == pytest.approx(4 * 1.6, abs=0.2)
     assert np.all(np.isfinite(data['poses']))
     assert (out / 'trajectories.png').stat().st_size > 10_000
-    assert list((out / 'logs').glob('sim_bridge-*.log'))
+    host = list((out / 'logs').glob('smarticle-compose-*.log'))        # composed by default
+    assert 'composed in one process' in proc.stdout and len(host) == 1
     assert 'live glider monitor, last report' in proc.stdout
     assert '3 feedback nodes' in proc.stdout and 'feedback halts per robot: 0:' in proc.stdout   # on by default
-    logs = sorted((out / 'logs').glob('feedback-*.log'))
-    assert len(logs) == 3 and all('windows' in log.read_text() for log in logs)  # each node started
+    assert host[0].read_text().count('windows') == 3                   # each feedback node started
     graph = (out / 'nodes.txt').read_text().split()              # the ROS graph during the run
     assert 'every fully qualified name distinct' in proc.stdout and len(graph) == len(set(graph)), graph
     for k in range(3):                                           # each robot's nodes in its namespace
@@ -45,8 +45,10 @@ def test_demo_runs_the_stack_and_writes_its_outputs(tmp_path: Path) -> None:
 def test_demo_without_feedback_runs_the_open_loop_gait_only(tmp_path: Path) -> None:
     out = tmp_path / 'demo'
     proc = subprocess.run([sys.executable, '-m', 'smarticle_bringup.demo', '--robots', '2', '--periods', '3',
-                           '--no-feedback', '--out', str(out)], capture_output=True, text=True, timeout=300)
+                           '--no-feedback', '--separate', '--out', str(out)], capture_output=True, text=True,
+                          timeout=300)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
-    assert 'feedback' not in proc.stdout.split('started')[0] and 'feedback halts' not in proc.stdout
-    assert not list((out / 'logs').glob('feedback-*.log'))
+    assert 'feedback nodes' not in proc.stdout and 'feedback halts' not in proc.stdout
+    assert 'as separate processes' in proc.stdout
+    assert not list((out / 'logs').glob('feedback-*.log')) and len(list((out / 'logs').glob('gait-*.log'))) == 2
     assert np.load(out / 'poses.npz')['poses'].shape[1:] == (2, 3)

@@ -150,3 +150,33 @@ def test_board_time_runs_at_its_rate_from_the_start() -> None:
     gait = SquareGait(GaitConfig.from_degrees(90.0))
     gait.start(0.0)
     assert gait.gait_time(board_time(50 * gait.config.period, 0.0, 1.005)) == pytest.approx(50.25)
+
+
+def test_a_new_amplitude_starts_at_the_next_period_and_never_jumps() -> None:
+    import math
+
+    from smarticle_common.gait import GaitConfig, GaitError, SquareGait
+
+    old, new = math.radians(90.0), math.radians(45.0)
+    gait = SquareGait(GaitConfig(old, period=1.6))
+    gait.start(0.0)
+    times = [i * 0.01 for i in range(501)]                     # 0 .. 5 s: periods start at 1.6, 3.2, 4.8
+    before = [gait.command(t) for t in times[:201]]            # up to t = 2.0 s, inside period 1
+    gait.set_alpha_max(new)
+    assert gait.pending is not None and gait.config.alpha_max == old
+    after = [gait.command(t) for t in times[201:]]
+    assert max(abs(v) for c in before for v in c.targets) == pytest.approx(old)
+    late = [c for t, c in zip(times[201:], after, strict=True) if t < 3.2 - 1e-9]   # rest of period 1: old square
+    assert {round(abs(v), 6) for c in late for v in c.targets} == {round(old, 6)}
+    last = [c for t, c in zip(times[201:], after, strict=True) if t >= 3.6]
+    assert {round(abs(v), 6) for c in last for v in c.targets} == {round(new, 6)}
+    assert gait.pending is None and gait.config.alpha_max == new
+    steps = [abs(b - a) for x, y in zip([*before, *after], [*before, *after][1:], strict=False) for a, b in
+             zip(x.positions, y.positions, strict=True)]
+    assert max(steps) <= gait.config.servo_speed * 0.01 + 1e-9          # never faster than the servo
+    with pytest.raises(GaitError):
+        gait.set_alpha_max(math.radians(200.0))
+    assert gait.pending is None and gait.config.alpha_max == new        # unchanged
+    idle = SquareGait(GaitConfig(old))
+    idle.set_alpha_max(new)                                             # before the start: at once
+    assert idle.config.alpha_max == new and idle.command(0.0).targets == pytest.approx((new, new))

@@ -116,3 +116,32 @@ def test_the_namespace_names_the_robot_and_a_disagreeing_robot_id_is_refused(nod
                           capture_output=True, text=True, timeout=30)
     assert proc.returncode == 2
     assert 'disagrees with its namespace /smarticle_3' in proc.stdout + proc.stderr
+
+
+@pytest.mark.integration
+def test_alpha_max_changes_at_run_time_and_bad_changes_are_refused(nodes, ros_node) -> None:  # type: ignore[no-untyped-def]
+    from sensor_msgs.msg import JointState
+
+    from tests.helpers.params import get_parameter, set_parameter
+
+    proc = nodes.start('gait', '--ros-args', '-r', '__ns:=/smarticle_4', '-p', 'alpha_max_deg:=60.0',
+                '-p', 'period:=0.8', '-p', 'heartbeat:=0.05', '-p', 'autostart:=true')
+    node = ros_node('gait_params_probe')
+    got: list[tuple[float, ...]] = []
+    node.create_subscription(JointState, topics.topic('joint_commands', 4), lambda m: got.append(tuple(m.position)),
+                             topics.qos_profile(topics.Qos.COMMAND))
+    assert spin_until(node, lambda: len(got) >= 5, 15.0), nodes.output(proc)
+    target = '/smarticle_4/gait'
+    for name, value, reason in (('alpha_max_deg', 150.0, 'range'), ('alpha_max_deg', 'wide', 'type'),
+                                ('period', 1.6, 'read-only'), ('phase', 0.5, 'read-only')):
+        ok, why = set_parameter(node, target, name, value)
+        assert not ok and why, (name, value)
+        assert reason in why.lower() or (reason == 'range' and 'max' in why.lower()), why
+    assert get_parameter(node, target, 'alpha_max_deg') == 60.0 and get_parameter(node, target, 'period') == 0.8
+    assert set_parameter(node, target, 'alpha_max_deg', 30.0) == (True, '')
+    assert get_parameter(node, target, 'alpha_max_deg') == 30.0
+    count = len(got)
+    spin_until(node, lambda: False, 2.0)                 # > 2 periods: the new square is in use
+    amplitudes = [round(math.degrees(max(abs(v) for v in pos)), 6) for pos in got[count:]]
+    assert amplitudes[0] == 60.0 and amplitudes[-10:] == [30.0] * 10     # the old square until its period ends
+    assert sorted(set(amplitudes)) == [30.0, 60.0] and amplitudes == sorted(amplitudes, reverse=True)

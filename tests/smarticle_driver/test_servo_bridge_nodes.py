@@ -316,3 +316,73 @@ def test_fake_board_cli_prints_its_port_and_obeys_the_control_file(nodes: Any, t
         handle.write('quit\n')
     assert proc.wait(timeout=5) == 0
     assert "error: cannot understand 'bogus'" in nodes.output(proc)
+
+
+def lifecycle(node: Any, target: str, transition: int | None = None) -> tuple[bool, str]:
+    """Trigger ``transition`` (lifecycle_msgs/Transition id) on ``target`` if given; (success, state label)."""
+    from lifecycle_msgs.srv import ChangeState, GetState
+
+    success = True
+    if transition is not None:
+        client = node.create_client(ChangeState, f'{target}/change_state')
+        assert client.wait_for_service(timeout_sec=15.0)
+        request = ChangeState.Request()
+        request.transition.id = transition
+        future = client.call_async(request)
+        assert spin_until(node, future.done, 15.0)
+        success = future.result().success
+        node.destroy_client(client)
+    client = node.create_client(GetState, f'{target}/get_state')
+    assert client.wait_for_service(timeout_sec=15.0)
+    future = client.call_async(GetState.Request())
+    assert spin_until(node, future.done, 15.0)
+    node.destroy_client(client)
+    return success, future.result().current_state.label
+
+
+@pytest.mark.integration
+def test_the_lifecycle_walks_every_transition(nodes: Any, ros_node: Any, tmp_path: Path) -> None:
+    from lifecycle_msgs.msg import Transition
+    from sensor_msgs.msg import JointState
+
+    port = tmp_path / 'maestro_later'                 # no board yet: configure must fail
+    proc = nodes.start('servo_bridge', '--ros-args', '-p', f'port:={port}', '-p', 'autostart:=false')
+    node = ros_node('lifecycle_probe')
+    target = '/servo_bridge'
+    states = subscribe(node, 'joint_states')
+    diagnostics = subscribe(node, 'diagnostics')
+    commands = node.create_publisher(JointState, topics.topic('joint_commands', 0),
+                                     topics.qos_profile(topics.Qos.COMMAND))
+
+    def command(angle: float, speed: float) -> None:
+        commands.publish(JointState(name=list(topics.JOINT_NAMES), position=[angle, 0.0], velocity=[speed, speed]))
+        spin_until(node, lambda: False, 0.3)
+
+    assert lifecycle(node, target) == (True, 'unconfigured'), nodes.output(proc)
+    assert lifecycle(node, target, Transition.TRANSITION_CONFIGURE) == (False, 'unconfigured')
+    assert 'cannot open the board' in nodes.output(proc)
+    with running_emulator(port) as emulator:
+        assert lifecycle(node, target, Transition.TRANSITION_CONFIGURE) == (True, 'inactive')
+        assert spin_until(node, lambda: commands.get_subscription_count() >= 1, 10.0)
+        command(0.5, 2.0)                             # inactive: commands do not reach the servos
+        assert emulator.targets() == [] and states == []
+        assert lifecycle(node, target, Transition.TRANSITION_ACTIVATE) == (True, 'active')
+        command(0.5, 2.0)
+        assert [r.channel for r in emulator.targets()][:2] == [0, 1]
+        assert spin_until(node, lambda: len(states) >= 5, 10.0)
+        command(-1.5, 0.5)                            # a slow stroke: the arm is between the ends
+        before = len(emulator.targets())
+        assert lifecycle(node, target, Transition.TRANSITION_DEACTIVATE) == (True, 'inactive')
+        hold = emulator.targets()[before:]
+        assert [r.channel for r in hold] == [0], hold   # arm 1 held where it was
+        servos = load_servo_calibration(CONFIG / 'servo_calibration.yaml')
+        held = servos['arm1'].pulse_to_angle(hold[0].pulse_us)
+        assert -1.5 < held < 0.5, held
+        count, received = len(emulator.targets()), len(states)
+        command(1.0, 2.0)                             # ignored while inactive; no joint states either
+        assert len(emulator.targets()) == count and len(states) <= received + 2
+        assert lifecycle(node, target, Transition.TRANSITION_CLEANUP) == (True, 'unconfigured')
+        assert spin_until(node, lambda: any('unconfigured' in m for _, m, _ in statuses(diagnostics[-2:])), 5.0)
+        assert lifecycle(node, target, Transition.TRANSITION_CONFIGURE) == (True, 'inactive')   # again
+        assert lifecycle(node, target, Transition.TRANSITION_INACTIVE_SHUTDOWN) == (True, 'finalized')
+        assert proc.poll() is None                   # finalized, still answering until stopped

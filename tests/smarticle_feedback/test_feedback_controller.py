@@ -129,3 +129,17 @@ def test_parameters_build_the_config() -> None:
     assert 'arm1_back' not in config.enabled_faces and config.debounce == 2
     with pytest.raises(ParameterError, match='node feedback: impact window f_min'):
         config_from_values(default_values(arm1_front_min=7.0, arm1_front_max=6.0))
+
+
+def test_new_windows_apply_from_the_next_sample_and_keep_the_state() -> None:
+    from smarticle_feedback.errors import FeedbackConfigError
+
+    controller = ImpactController(FeedbackConfig.uniform(1.0, 5.0, period=1.6))
+    controller.start(0.0)
+    assert controller.update(0.1, [3.0, 0.0, 0.0, 0.0]).halt
+    controller.set_windows(FeedbackConfig.uniform(1.0, 2.0, period=1.6))
+    assert controller.start_time == 0.0 and controller.counters.halts == 1
+    assert not controller.update(2.0, [3.0, 0.0, 0.0, 0.0]).halt      # 3 N is outside [1, 2] now
+    assert controller.update(2.1, [1.5, 0.0, 0.0, 0.0]).halt
+    with pytest.raises(FeedbackConfigError, match='period and phase'):
+        controller.set_windows(FeedbackConfig.uniform(1.0, 2.0, period=1.0))

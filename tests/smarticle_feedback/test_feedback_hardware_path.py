@@ -46,3 +46,40 @@ def test_the_feedback_node_refuses_an_inverted_window(nodes: Any) -> None:
     proc = nodes.start('feedback', '--ros-args', '-p', 'arm2_back_min:=5.0', '-p', 'arm2_back_max:=1.0')
     assert proc.wait(timeout=20) == 2
     assert 'f_min (5 N) is above f_max (1 N)' in nodes.output(proc)
+
+
+def test_impact_windows_change_at_once_and_bad_changes_are_refused(nodes: Any, ros_node: Any) -> None:
+    from sensor_msgs.msg import JointState
+    from std_msgs.msg import Header
+    from smarticle_common import topics
+
+    from tests.helpers.params import get_parameter, set_parameter
+
+    nodes.start('feedback', '--ros-args', '-r', '__ns:=/smarticle_5', '-p', 'start_at:=0.0', '-p', 'period:=1.0')
+    probe = ros_node('feedback_params_probe')
+    halts: list[Any] = []
+    probe.create_subscription(Header, topics.topic('halt', 5), halts.append, topics.qos_profile(topics.Qos.COMMAND))
+    fsr = probe.create_publisher(JointState, topics.topic('fsr', 5), topics.qos_profile(topics.Qos.SENSOR))
+    assert spin_until(probe, lambda: fsr.get_subscription_count() >= 1, 20.0)
+    spin_until(probe, lambda: False, 0.5)                # the subscriber's side of the match
+
+    def press(t: float, newtons: float) -> int:
+        """One sample at time t (its own gait period) with arm1_front at ``newtons``; the halts so far."""
+        msg = JointState(name=list(topics.FSR_FACES), effort=[newtons, 0.0, 0.0, 0.0])
+        msg.header.stamp.sec = int(t)
+        fsr.publish(msg)
+        spin_until(probe, lambda: False, 0.4)
+        return len(halts)
+
+    target = '/smarticle_5/feedback'
+    assert press(10.0, 3.0) == 1                           # inside the default window [0.3, 6] N
+    for name, value, reason in (('arm1_front_min', 7.0, 'above f_max'), ('arm1_front_max', -1.0, 'out of range'),
+                                ('period', 2.0, 'read-only'), ('robot_id', 3, 'read-only')):
+        ok, why = set_parameter(probe, target, name, value)
+        assert not ok and reason in why, (name, why)
+    assert get_parameter(probe, target, 'arm1_front_min') == 0.3 and press(11.0, 3.0) == 2   # unchanged
+    assert set_parameter(probe, target, 'arm1_front_max', 2.0) == (True, '')
+    assert press(12.0, 3.0) == 2                           # 3 N is outside [0.3, 2] N now: no halt
+    assert press(13.0, 1.5) == 3
+    assert set_parameter(probe, target, 'arm1_front_enabled', False) == (True, '')
+    assert press(14.0, 1.5) == 3

@@ -37,22 +37,26 @@ def _stamp_ns(header: Any) -> int:
 
 
 def _pose_array(poses: np.ndarray, t: float) -> Any:
-    from geometry_msgs.msg import Pose, PoseArray
+    from geometry_msgs.msg import PoseArray
+    from smarticle_common.messages import pose_message
 
     msg = PoseArray()
     msg.header.stamp.sec, msg.header.stamp.nanosec = int(t), round((t - int(t)) * 1e9)
     msg.header.frame_id = topics.ARENA_FRAME
-    for x, y, h in poses:
-        pose = Pose()
-        pose.position.x, pose.position.y = float(x), float(y)
-        pose.orientation.z, pose.orientation.w = math.sin(h / 2), math.cos(h / 2)
-        msg.poses.append(pose)
+    msg.poses = [pose_message(row) for row in poses]      # a NaN row goes out as the unseen pose
     return msg
 
 
 def _xy(msg: Any) -> np.ndarray:
+    """x, y, heading of every pose, as published (no unseen handling: the tests check the wire)."""
     return np.array([[p.position.x, p.position.y, 2 * math.atan2(p.orientation.z, p.orientation.w)]
                      for p in msg.poses])
+
+
+def _unseen(msg: Any) -> np.ndarray:
+    """Per robot: whether the pose is the contract's unseen pose (finite: RViz accepts the message)."""
+    return np.array([p.position.z == topics.UNSEEN_Z and p.orientation.w == 1.0 and
+                     np.all(np.isfinite([p.position.x, p.position.y, p.orientation.z])) for p in msg.poses])
 
 
 def test_glider_monitor_reports_a_constructed_glider(nodes, ros_node) -> None:  # type: ignore[no-untyped-def]
@@ -61,7 +65,7 @@ def test_glider_monitor_reports_a_constructed_glider(nodes, ros_node) -> None:  
     from visualization_msgs.msg import Marker, MarkerArray
 
     monitor = nodes.start('glider_monitor', '--ros-args', '-p', 'publish_period:=0.0', '-p', 'min_periods:=3',
-                          '-p', 't0:=0.0',
+                          '-p', 'start_at:=0.0',
                           '-p', 'show_arms:=false')
     node = ros_node('glider_probe')
     reports: list[Any] = []
@@ -108,9 +112,12 @@ def test_tracker_node_answers_every_frame_and_survives_bad_ones(nodes, ros_node,
     node = ros_node('tracker_probe')
     got: dict[int, np.ndarray] = {}
     got_lost: list[Any] = []
+    raw: dict[int, Any] = {}
     single: list[Any] = []
-    node.create_subscription(PoseArray, topics.topic('poses'), lambda m: got.__setitem__(_stamp_ns(m.header), _xy(m)),
-                             _deep_best_effort())
+    def on_poses(msg: Any) -> None:
+        got[_stamp_ns(msg.header)] = _xy(msg)
+        raw[_stamp_ns(msg.header)] = msg
+    node.create_subscription(PoseArray, topics.topic('poses'), on_poses, _deep_best_effort())
     node.create_subscription(PoseArray, '/lost/poses', got_lost.append, _deep_best_effort())
     node.create_subscription(PoseStamped, topics.topic('pose', 2), single.append, _deep_best_effort())
     pub = node.create_publisher(Image, topics.topic('image_raw'), _reliable())
@@ -134,9 +141,10 @@ def test_tracker_node_answers_every_frame_and_survives_bad_ones(nodes, ros_node,
     good = got[10**9]
     assert np.max(np.hypot(*(good[:, :2] - truth[:, :2]).T)) < 1e-3
     assert np.allclose(np.cos(good[:, 2] - truth[:, 2]), 1.0, atol=1e-3)
+    assert not np.any(_unseen(raw[10**9]))
     for stamp in (2, 3, 4):
-        assert np.all(np.isnan(got[stamp * 10**9][:, :2])), stamp
-    assert all(np.all(np.isnan(_xy(m)[:, :2])) for m in got_lost)
+        assert np.all(_unseen(raw[stamp * 10**9])), stamp
+    assert all(np.all(_unseen(m)) for m in got_lost)
     assert single and single[0].pose.position.x == pytest.approx(-0.1, abs=1e-3)
     log = nodes.output(tracker)
     assert "unsupported image encoding '16UC1'" in log and 'recalibrate' in log

@@ -73,17 +73,23 @@ def _stamp(msg: Any) -> float:
     return float(msg.header.stamp.sec) + 1e-9 * float(msg.header.stamp.nanosec)
 
 
+def _planar(pose: Any) -> tuple[float, float, float]:
+    """(x, y, heading) of a decoded Pose; NaN for the contract's unseen pose (``topics.UNSEEN_Z``)."""
+    p, q = pose.position, pose.orientation
+    if p.z == contract.UNSEEN_Z:
+        return (math.nan, math.nan, math.nan)
+    return (p.x, p.y, quaternion_heading(q.x, q.y, q.z, q.w))
+
+
 def poses_from_messages(items: Iterable[tuple[int, Any]]) -> PoseSeries:
-    """Build a PoseSeries from (log time ns, decoded PoseArray) pairs; robots missing later are NaN."""
+    """Build a PoseSeries from (log time ns, decoded PoseArray) pairs; unseen and missing robots are NaN."""
     rows: list[list[tuple[float, float, float]]] = []
     log_time: list[float] = []
     stamp: list[float] = []
     for log_ns, msg in items:
         log_time.append(log_ns * 1e-9)
         stamp.append(_stamp(msg))
-        rows.append([(p.position.x, p.position.y,
-                      quaternion_heading(p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w))
-                     for p in msg.poses])
+        rows.append([_planar(p) for p in msg.poses])
     width = max((len(r) for r in rows), default=0)
     xyh = np.full((len(rows), width, 3), np.nan)
     for t, row in enumerate(rows):
@@ -172,9 +178,10 @@ def poses_from_groups(item: col.TopicPayloads, groups: list[col.Group]) -> PoseS
         at = np.searchsorted(rows, group.rows)
         poses = group.values['poses']
         qx, qy, qz, qw = poses[..., 3], poses[..., 4], poses[..., 5], poses[..., 6]
-        xyh[at, :count, 0] = poses[..., 0]
-        xyh[at, :count, 1] = poses[..., 1]
-        xyh[at, :count, 2] = quaternion_headings(qx, qy, qz, qw)
+        unseen = poses[..., 2] == contract.UNSEEN_Z            # the contract's unseen pose: a NaN row
+        xyh[at, :count, 0] = np.where(unseen, np.nan, poses[..., 0])
+        xyh[at, :count, 1] = np.where(unseen, np.nan, poses[..., 1])
+        xyh[at, :count, 2] = np.where(unseen, np.nan, quaternion_headings(qx, qy, qz, qw))
     return PoseSeries(_seconds(item.log_time[rows]), stamp, xyh)
 
 

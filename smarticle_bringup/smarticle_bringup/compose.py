@@ -1,0 +1,142 @@
+"""``smarticle-compose``: many of the stack's nodes in one process on one executor, as ROS 2 composition does.
+
+Usage::
+
+    smarticle-compose smarticle_bringup/launch/sim_stack.launch.xml robots:=7 duration:=20.0
+    smarticle-compose smarticle_bringup sim_stack.launch.xml robots:=7 [--ros-args ...]
+
+A launch file says which nodes to host (``launch_files.resolve``: the same file ``sim.launch.xml``
+includes as separate processes when ``composed:=false``). Each ``<node>`` becomes an instance of **the
+same node class** that its executable runs (``COMPONENTS``: the stack's registry of composable nodes,
+as rclcpp_components registers plugins), built with its own command-line arguments (name, namespace,
+parameter files and values, remappings; the host's global ROS arguments are not applied to them). All
+of them go on one ``SingleThreadedExecutor``. A node with a ``run(executor)`` method (the lock-step sim
+bridge) drives that executor, so every hosted node's callbacks run inside its loop, and the host exits
+with its code when it returns; otherwise the host spins until Ctrl-C. Messages between hosted nodes
+still go through the middleware (rclpy has no intra-process path), but 2N + 2 Python interpreters become
+one and every hand-over stays in one process.
+
+A file with a node that is not composable, or any other bad input, is a one-line error and exit code 2,
+and nothing is started; a node that cannot start (a bad parameter) ends the host with exit code 2.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+from collections.abc import Callable, Sequence
+from typing import Any
+
+#: (package, executable) -> "module:Class" of every node that may be hosted (each class takes rclpy
+#: Node options as keyword arguments).
+COMPONENTS: dict[tuple[str, str], str] = {
+    ('smarticle_driver', 'gait'): 'smarticle_driver.gait_node:GaitNode',
+    ('smarticle_driver', 'servo_bridge'): 'smarticle_driver.servo_bridge_node:ServoBridgeNode',
+    ('smarticle_feedback', 'feedback'): 'smarticle_feedback.feedback_node:FeedbackNode',
+    ('smarticle_sim', 'sim_bridge'): 'smarticle_sim.sim_bridge_node:SimBridgeNode',
+    ('smarticle_tracking', 'glider_monitor'): 'smarticle_tracking.glider_monitor_node:GliderMonitorNode',
+    ('smarticle_tracking', 'tracker'): 'smarticle_tracking.tracker_node:TrackerNode',
+}
+
+NAME = 'smarticle-compose'
+
+
+def component_class(package: str, executable: str) -> Callable[..., Any]:
+    """The node class of ``package``/``executable`` (KeyError if it is not composable)."""
+    module, _, cls = COMPONENTS[(package, executable)].partition(':')
+    return getattr(importlib.import_module(module), cls)
+
+
+def plan_nodes(words: Sequence[str]) -> list[Any]:
+    """The checked NodeActions of ``[PACKAGE] FILE [name:=value ...]`` (LaunchFileError if any is bad)."""
+    from .launch_files import LaunchFileError
+    from .launcher import plan_from_command_line
+
+    plan = plan_from_command_line(list(words))
+    for node in plan.nodes:
+        if (node.package, node.executable) not in COMPONENTS:
+            raise LaunchFileError(f'{node.where}: {node.package}/{node.executable} cannot be composed (composable: '
+                                  + ', '.join(f'{p}/{e}' for p, e in sorted(COMPONENTS)) + ')')
+    return list(plan.nodes)
+
+
+def host(actions: Sequence[Any], args: list[str] | None = None,
+         executor_factory: Callable[[], Any] | None = None) -> int:
+    """Build every node of ``actions`` in this process, run them on one executor; return the exit code.
+
+    The Jazzy idiom, for many nodes: ``rclpy.init``; build; run or spin; on Ctrl-C or external shutdown
+    stop quietly; finally destroy every node and ``try_shutdown``. A startup error of a node (bad
+    parameter, a file or port that cannot be opened) is logged as fatal and gives exit code 2.
+    """
+    import rclpy
+    from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+    from smarticle_common.params import ParameterError
+
+    from smarticle_driver.errors import DriverError
+
+    rclpy.init(args=args)
+    nodes: list[Any] = []
+    code = 0
+    building = True
+    try:
+        for action in actions:
+            cls = component_class(action.package, action.executable)
+            nodes.append(cls(cli_args=action.ros_arguments(), use_global_arguments=False))
+        building = False
+        executor = (executor_factory or SingleThreadedExecutor)()
+        for node in nodes:
+            executor.add_node(node)
+        runners = [node for node in nodes if callable(getattr(node, 'run', None))]
+        rclpy.logging.get_logger(NAME).info(f'hosting {len(nodes)} nodes on one executor: '
+                                            + ', '.join(n.get_fully_qualified_name() for n in nodes))
+        if len(runners) > 1:
+            raise ParameterError('more than one hosted node drives its own loop: '
+                                 + ', '.join(n.get_fully_qualified_name() for n in runners))
+        if runners:
+            code = int(runners[0].run(executor))
+        else:
+            executor.spin()
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except (ParameterError, DriverError) as err:
+        if not building:
+            raise
+        rclpy.logging.get_logger(NAME).fatal(f'cannot start: {err}')
+        code = 2
+    except RuntimeError:      # rclpy's errors of a context that a signal just ended
+        if rclpy.ok():
+            raise
+    finally:
+        for node in reversed(nodes):
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return code
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the host; return the exit code."""
+    from .launch_files import LaunchFileError
+
+    argv = sys.argv[1:] if argv is None else argv
+    # the host's own ROS arguments start at --ros-args; everything before is the file and name:=value words
+    # (rclpy would take those for legacy remapping rules, so they never reach rclpy.init)
+    cut = argv.index('--ros-args') if '--ros-args' in argv else len(argv)
+    words, ros_args = argv[:cut], argv[cut:]
+    if not words or words[0] in ('-h', '--help'):
+        print(__doc__)
+        return 0 if words else 2
+    try:
+        actions = plan_nodes(words)
+    except LaunchFileError as err:
+        print(f'{NAME}: {err}', file=sys.stderr)
+        return 2
+    return host(actions, [NAME, *ros_args])
+
+
+def entry() -> None:
+    """Console-script entry point."""
+    raise SystemExit(main())
+
+
+if __name__ == '__main__':
+    entry()
