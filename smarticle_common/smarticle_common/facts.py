@@ -100,10 +100,27 @@ SMALL = RobotSpec(name='small', body_width=0.054, body_depth=0.022, body_height=
                   arm_length=0.050, arm_thickness=0.003, arm_height=0.023, arm_clearance=0.002,
                   total_mass=0.0348, arm_mass=0.005, servo_torque=0.05)
 
-#: The larger FSR robot (175 g; arms 6.0 long x 0.7 cm thick, body 6.5 x 3.5 cm); heights assumed.
+#: The larger FSR robot of the paper's Fig. 5(a): measured there are its mass (175 g), arms (6.0 cm long,
+#: 0.7 cm thick), body (6.5 cm wide, 3.5 cm deep) and FSRs on all four arm faces. Assumed, each named in
+#: ``FEEDBACK_ASSUMED`` (docs/feedback.md, "The feedback robot as built", has the sensitivity table):
+#: the heights (body 4.0 cm, arms 3.4 cm with 3 mm clearance: the small robot's proportions, arms ~85 % of
+#: the body height); the arm mass (20 g each, servo horn + arm + FSRs, body 135 g with two servos and
+#: the board); the servo speed (the small robot's 0.1 s / 60 deg, so the 1.6 s gait is the same); the
+#: servo torque 0.3 N m, scaled from the small robot's 0.05 N m so that the largest arm-tip force per
+#: robot weight is the same (tau / (l m g): 0.05 / (0.050 x 0.0348 x 9.81) = 2.9; 2.9 x 0.060 x 0.175 x
+#: 9.81 = 0.30 N m); the small robot's 0.05 N m was lowered because stronger servos drive jams that tip
+#: robots, and this keeps the same margin; 0.4 N m (the earlier value) was a guessed standard-servo stall
+#: torque. The FSRs are modelled as covering each arm face whole (the sim's FSR force is the normal
+#: contact force anywhere on the face): an FSR of the 400 series has a round active area of 5-13 mm
+#: against a 60 x 34 mm face, so a real sensor misses touches off its pad.
 FEEDBACK = RobotSpec(name='feedback', body_width=0.065, body_depth=0.035, body_height=0.040,
                      arm_length=0.060, arm_thickness=0.007, arm_height=0.034, arm_clearance=0.003,
-                     total_mass=0.175, arm_mass=0.020, servo_torque=0.4)
+                     total_mass=0.175, arm_mass=0.020, servo_torque=0.3)
+
+#: The feedback robot's values that the paper does not give (field: value), see ``FEEDBACK``.
+FEEDBACK_ASSUMED: dict[str, float] = {'body_height': FEEDBACK.body_height, 'arm_height': FEEDBACK.arm_height,
+                                      'arm_clearance': FEEDBACK.arm_clearance, 'arm_mass': FEEDBACK.arm_mass,
+                                      'servo_speed': FEEDBACK.servo_speed, 'servo_torque': FEEDBACK.servo_torque}
 
 PRESETS: dict[str, RobotSpec] = {SMALL.name: SMALL, FEEDBACK.name: FEEDBACK}
 
