@@ -30,7 +30,10 @@ from smarticle_common.gait import GaitConfig
 from smarticle_feedback.controller import FeedbackConfig, ImpactController
 
 #: The C2 start of the feedback robot (r in BL, theta, phi in deg, phases): with robot 2 a quarter period
-#: ahead (the paper's basin-scan phase p = 0.25) it binds as an aligned pair that travels (docs/feedback.md).
+#: ahead (the paper's basin-scan phase p = 0.25) the pair collides every half cycle (docs/feedback.md). A
+#: start half a period apart (phases 0 and 0.5) looks longer-lived by r alone but is not a glider at the
+#: converged physics: after the first period the robots never touch again and r creeps from 1.48 BL by the
+#: single-robot drift (0.0012 BL per period), crossing r_bind after about 100 periods.
 C2_START = (1.3, 0.0, 350.0, (0.0, 0.25))
 #: Seeded jitter of the start (r in BL, theta and phi in deg).
 C2_JITTER = (0.04, 4.0, 4.0)

@@ -9,6 +9,15 @@ heading phi lies within ``c2_tolerance`` of 0 count. The suggested window is
 by default P80 to the largest: the compression collision is the hard end of the distribution, the many
 light resting touches stay below f_min. The table shows each face too.
 Command line: ``smarticle-feedback-calibrate run.npz``.
+
+From the compression signature (the paper's way: the window of the compression collision): given a
+per-step collision record of ``smarticle-c2-collisions`` (``c2_steps.npz``), the tool cuts it into
+contact events (``collisions.find_events``), and for each face proposes the window that best separates
+the peaks of the compression events (dr > 0) from those of the bracing ones (dr < 0): ``f_min`` the
+compression peak that maximises (compression caught / compression) - (bracing caught / bracing) on that
+face, ``f_max`` the largest compression peak times ``HEADROOM``; a face is enabled when its window
+catches more compression than bracing events. A window set that catches no compression event, or that
+catches most bracing events, is reported with the counts and refused (exit code 3).
 """
 
 from __future__ import annotations
@@ -23,6 +32,7 @@ from pathlib import Path
 import numpy as np
 from smarticle_common.topics import FSR_FACES
 
+from .collisions import CollisionEvent, find_events, load_record
 from .errors import CalibrationInputError
 
 #: Forces below this (N) are contact noise, not impacts (the sim reports tiny resting forces).
@@ -164,16 +174,130 @@ def plot_window(s: WindowSuggestion, path: str | Path, title: str = '') -> Path:
     return path
 
 
+#: f_max of a face = its largest compression peak times this (room for a harder hit than recorded).
+HEADROOM = 1.25
+
+
+@dataclass(frozen=True)
+class FaceWindow:
+    """Proposed window of one face and what it catches among the recorded events."""
+
+    face: str
+    f_min: float
+    f_max: float
+    enabled: bool
+    compression: int           # compression peaks of this face (both robots)
+    compression_caught: int
+    bracing: int
+    bracing_caught: int
+
+
+@dataclass(frozen=True)
+class SignatureWindows:
+    """Per-face windows from the compression signature, and the events caught by the enabled faces."""
+
+    faces: tuple[FaceWindow, ...]
+    compression_events: int
+    compression_caught: int
+    bracing_events: int
+    bracing_caught: int
+
+    @property
+    def problems(self) -> list[str]:
+        """Why this window set must not be shipped (empty if it may)."""
+        out = []
+        if self.compression_caught == 0:
+            out.append(f'no recorded compression event falls into the window (0 of {self.compression_events})')
+        if self.bracing_events and self.bracing_caught > self.bracing_events / 2:
+            out.append(f'the window also catches most bracing events ({self.bracing_caught} of '
+                       f'{self.bracing_events})')
+        return out
+
+
+def _caught(events: Sequence[CollisionEvent], windows: Sequence[FaceWindow]) -> int:
+    """Events in which some robot's enabled face peaks inside its window."""
+    n = 0
+    for ev in events:
+        if any(w.enabled and w.f_min <= ev.peaks[k, i] <= w.f_max for k in range(2) for i, w in enumerate(windows)):
+            n += 1
+    return n
+
+
+def face_window(face: str, comp: np.ndarray, brace: np.ndarray) -> FaceWindow:
+    """The window [f_min, HEADROOM x max] of one face that best separates compression from bracing peaks."""
+    if comp.size == 0:
+        return FaceWindow(face, 0.0, 0.0, False, 0, 0, int(brace.size), 0)
+    f_max = float(comp.max()) * HEADROOM
+    best, f_min = -math.inf, float(comp.min())
+    for lo in np.unique(comp):
+        score = float((comp >= lo).mean()) - (float(((brace >= lo) & (brace <= f_max)).mean()) if brace.size else 0.0)
+        if score > best:
+            best, f_min = score, float(lo)
+    c = int(((comp >= f_min) & (comp <= f_max)).sum())
+    b = int(((brace >= f_min) & (brace <= f_max)).sum())
+    return FaceWindow(face, f_min, f_max, c > b, int(comp.size), c, int(brace.size), b)
+
+
+def windows_from_events(events: Sequence[CollisionEvent], floor: float = DEFAULT_FLOOR) -> SignatureWindows:
+    """Per-face windows from the compression and bracing events' FSR peaks (both robots)."""
+    faces = []
+    for i, face in enumerate(FSR_FACES):
+        comp = np.array([ev.peaks[k, i] for ev in events if ev.kind == 'compression' for k in range(2)])
+        brace = np.array([ev.peaks[k, i] for ev in events if ev.kind == 'bracing' for k in range(2)])
+        faces.append(face_window(face, comp[comp > floor], brace[brace > floor]))
+    comp_ev = [ev for ev in events if ev.kind == 'compression']
+    brace_ev = [ev for ev in events if ev.kind == 'bracing']
+    return SignatureWindows(tuple(faces), len(comp_ev), _caught(comp_ev, faces), len(brace_ev),
+                            _caught(brace_ev, faces))
+
+
+def format_windows(w: SignatureWindows) -> str:
+    """Markdown table of the proposed per-face windows with the events each catches."""
+    rows = ['| face | enabled | f_min (N) | f_max (N) | compression caught | bracing caught |',
+            '| --- | --- | ---: | ---: | ---: | ---: |']
+    for f in w.faces:
+        rows.append(f'| {f.face} | {"yes" if f.enabled else "no"} | {f.f_min:.2f} | {f.f_max:.2f} | '
+                    f'{f.compression_caught} / {f.compression} | {f.bracing_caught} / {f.bracing} |')
+    rows.append('')
+    rows.append(f'events caught by the enabled faces: compression {w.compression_caught} of {w.compression_events}, '
+                f'bracing {w.bracing_caught} of {w.bracing_events}')
+    return '\n'.join(rows)
+
+
+def windows_yaml(w: SignatureWindows) -> str:
+    """The windows as feedback node parameters."""
+    return ''.join(f'    {f.face}_min: {f.f_min:.2f}\n    {f.face}_max: {f.f_max:.2f}\n'
+                   f'    {f.face}_enabled: {"true" if f.enabled else "false"}\n' for f in w.faces)
+
+
+def main_events(path: str, floor: float) -> int:
+    """Calibrate from a per-step collision record; exit code 3 when the windows must not be shipped."""
+    events = find_events(load_record(path))
+    w = windows_from_events(events, floor)
+    sys.stdout.write(format_windows(w) + '\n')
+    if w.problems:
+        sys.stderr.write('smarticle-feedback-calibrate: not shipping these windows: ' + '; '.join(w.problems) + '\n')
+        return 3
+    sys.stdout.write('\nfeedback parameters:\n' + windows_yaml(w))
+    return 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of `smarticle-feedback-calibrate`: table on stdout, PNG next to the input (or --png)."""
     parser = argparse.ArgumentParser(prog='smarticle-feedback-calibrate', description=__doc__.split('\n')[0])
-    parser.add_argument('recording', help='npz written by `smarticle-sim run ... --fsr` (bags: not yet)')
+    parser.add_argument('recording', help='c2_steps.npz of `smarticle-c2-collisions` (per-face windows from the compression signature), or an npz of `smarticle-sim run ... --fsr` (percentile window)')
     parser.add_argument('--png', help='figure path (default: <recording>_window.png)')
     parser.add_argument('--floor', type=float, default=DEFAULT_FLOOR, help='ignore forces below this (N)')
     parser.add_argument('--low', type=float, default=80.0, help='percentile of f_min (default 80)')
     parser.add_argument('--high', type=float, default=100.0, help='percentile of f_max (default 100 = the largest)')
     parser.add_argument('--c2-only', action='store_true', help='pair runs: only samples with phi near 0')
     args = parser.parse_args(argv)
+    if _is_collision_record(args.recording):
+        try:
+            return main_events(args.recording, args.floor)
+        except (CalibrationInputError, OSError, KeyError, ValueError) as err:
+            sys.stderr.write(f'smarticle-feedback-calibrate: {err}\n')
+            return 2
     try:
         suggestion = calibrate_recording(args.recording, args.floor, args.low, args.high, args.c2_only)
     except (CalibrationInputError, OSError, KeyError, ValueError) as err:
@@ -184,6 +308,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     sys.stdout.write(format_table(suggestion) + '\n\nfeedback parameters:\n' + yaml_snippet(suggestion)
                      + f'\nfigure: {png}\n')
     return 0
+
+
+def _is_collision_record(path: str) -> bool:
+    """True if ``path`` is an npz written by ``CollisionRecord.save``."""
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            return 'kind' in data.files and str(data['kind']) == 'collision_steps'
+    except (OSError, ValueError):
+        return False
 
 
 if __name__ == '__main__':

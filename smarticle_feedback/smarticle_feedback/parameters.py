@@ -20,20 +20,27 @@ from .errors import FeedbackConfigError
 
 NODE_NAME = 'feedback'
 
-#: Default impact window (N), from `smarticle-feedback-calibrate` on simulated C2 collisions (docs/feedback.md).
-DEFAULT_F_MIN = 0.3
-DEFAULT_F_MAX = 6.0
+#: Default impact windows (f_min N, f_max N, enabled) per face, from `smarticle-feedback-calibrate` on the
+#: compression signature of a simulated C2 pair (`smarticle-c2-collisions --periods 40`, seed 0; the
+#: windows catch 30 of 33 compression events and 3 of 14 bracing ones; docs/feedback.md). arm1_back saw no
+#: collision at all and stays disabled.
+DEFAULT_WINDOWS: dict[str, tuple[float, float, bool]] = {
+    'arm1_front': (10.21, 19.91, True),
+    'arm1_back': (0.0, 0.0, False),
+    'arm2_front': (4.97, 13.27, True),
+    'arm2_back': (2.77, 13.69, True),
+}
 
 
 def _face_params() -> tuple[ParamSpec, ...]:
     specs: list[ParamSpec] = []
     for face in topics.FSR_FACES:
         specs += [
-            ParamSpec(f'{face}_min', DEFAULT_F_MIN, f'impact window of {face}: lowest force (N)', 0.0, 1000.0,
+            ParamSpec(f'{face}_min', DEFAULT_WINDOWS[face][0], f'impact window of {face}: lowest force (N)', 0.0, 1000.0,
                       runtime=True),
-            ParamSpec(f'{face}_max', DEFAULT_F_MAX, f'impact window of {face}: highest force (N)', 0.0, 1000.0,
+            ParamSpec(f'{face}_max', DEFAULT_WINDOWS[face][1], f'impact window of {face}: highest force (N)', 0.0, 1000.0,
                       runtime=True),
-            ParamSpec(f'{face}_enabled', True, f'whether an impact on {face} halts the arms', runtime=True),
+            ParamSpec(f'{face}_enabled', DEFAULT_WINDOWS[face][2], f'whether an impact on {face} halts the arms', runtime=True),
         ]
     return tuple(specs)
 

@@ -77,7 +77,7 @@ class _PoseReader:
 def run_trial(config: SimConfig, scene: Scene, periods: float, sample_every: int | None = None,
               record_fsr: bool = False, record_contacts: bool = False,
               progress: bool = False, controllers: ControllerFactory | None = None,
-              start_time: float = 0.0) -> Recording:
+              start_time: float = 0.0, stop: Callable[[Runner], bool] | None = None) -> Recording:
     """Run ``scene`` for ``periods`` gait periods from a synchronised start at ``start_time`` and record it.
 
     Samples are taken every ``sample_every`` control ticks (the first at t = 0); the default is about
@@ -85,7 +85,8 @@ def run_trial(config: SimConfig, scene: Scene, periods: float, sample_every: int
     angles are always recorded; FSR forces and robot-robot contacts only when asked (otherwise their
     arrays are zeros / False). A SimTrouble ends the trial early: the recording keeps every sample
     taken so far and ``meta['trouble']`` says why. ``controllers`` adds controllers (e.g. feedback)
-    that act before the gait cores in every tick; they may record what they did themselves.
+    that act before the gait cores in every tick; they may record what they did themselves. ``stop`` (asked
+    after every tick) ends the trial early; the recording keeps the samples taken so far.
     """
     if not (math.isfinite(periods) and periods > 0):
         raise SimError(f'periods must be > 0, got {periods!r}')
@@ -140,7 +141,7 @@ def run_trial(config: SimConfig, scene: Scene, periods: float, sample_every: int
             hooks.append(Hook(ticks_per_period, lambda _: bar.update(ticks_per_period), at_start=False))
         gaits.start(start_time)
         try:
-            runner.run(ticks, hooks)
+            runner.run(ticks, hooks, stop)
         except SimTrouble as trouble:
             meta['trouble'] = str(trouble)
         finally:

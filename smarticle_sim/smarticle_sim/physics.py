@@ -363,6 +363,14 @@ class Physics:
                 out[a, b] = out[b, a] = True
         return out
 
+    def link_contacts(self, a: int, b: int) -> np.ndarray:
+        """(3, 3) bool: [i, j] True where link i of robot ``a`` touches link j of robot ``b`` (body, arm 1, arm 2)."""
+        out = np.zeros((3, 3), dtype=bool)
+        ka, kb = self.check_robot(a), self.check_robot(b)
+        for point in self._client.getContactPoints(bodyA=self.body_ids[ka], bodyB=self.body_ids[kb]):
+            out[point[3] + 1, point[4] + 1] = True
+        return out
+
     def max_penetration(self) -> tuple[int, float]:
         """(robot, depth in m) of the deepest contact overlap now; (-1, 0.0) without contacts."""
         worst, robot = 0.0, -1

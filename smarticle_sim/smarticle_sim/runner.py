@@ -292,19 +292,37 @@ class FeedbackController:
 
     Put it before the ``GaitController`` in the runner's controllers, so that a halt is part of the tick
     it was decided in. Halts that took effect are listed in ``halts`` as (time, robot, face).
+
+    With ``peak_hold`` (the default) a tick's FSR sample is the largest force of each face over the physics
+    steps since the previous sample (a step hook on the runner), not the force at the tick's instant:
+    robot-robot collisions are kicks of a few milliseconds, shorter than a 1/60 s control tick, and an
+    instantaneous read would see most of them as zero. A real FSR read through a divider and the servo
+    board's ADC sees a kick stretched by the sensor's elastomer and the analogue input's filter; the peak
+    of the interval is the sim's stand-in for it (docs/feedback.md). Without ``peak_hold``: the instant.
     """
 
-    def __init__(self, gaits: GaitController, policies: Mapping[int, FeedbackPolicy]) -> None:
+    def __init__(self, gaits: GaitController, policies: Mapping[int, FeedbackPolicy], peak_hold: bool = True) -> None:
         self.gaits = gaits
         self.policies = dict(policies)
         self._robots = sorted(self.policies)
         self.halts: list[tuple[float, int, str]] = []
+        self.peak_hold = peak_hold
+        self._peak: np.ndarray | None = None
+        self._attached = False
+
+    def _on_step(self, runner: Runner) -> None:
+        forces = self.gaits.physics.fsr(self._robots)
+        self._peak = forces if self._peak is None else np.maximum(self._peak, forces)
 
     def before_tick(self, runner: Runner) -> None:
         """Read the FSR forces of the policies' robots and halt where a policy says so."""
         physics = self.gaits.physics
         now = physics.time
-        forces = physics.fsr(self._robots)
+        if self.peak_hold and not self._attached:
+            runner.step_hooks.append(self._on_step)
+            self._attached = True
+        forces = physics.fsr(self._robots) if self._peak is None else self._peak
+        self._peak = None
         for row, k in enumerate(self._robots):
             decision = self.policies[k].update(now, forces[row])
             if decision.halt and self.gaits.halt(k):

@@ -1,0 +1,89 @@
+"""The collisions of a C2 cycle, measured: record a C2 pair step by step and list every contact event.
+
+``record_pair`` runs the P6 C2 start (``p6.C2_START``, seeded like ``p6.run_pair_trial``) open loop and
+records, at every physics step, both robots' FSR forces, which links touch and r; ``smarticle_feedback.
+collisions`` cuts that into events (gait quarter, links and faces, FSR peaks, dr) and their signature.
+Command line: ``smarticle-c2-collisions --periods 40 --out out/feedback/c2`` (table, CSV, PNG, npz).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+from smarticle_common.gait import GaitConfig
+from smarticle_feedback.collisions import (CollisionRecord, find_events, format_events, format_signature,
+                                           plot_events, signature, write_events_csv)
+
+from .p6 import C2_START, START_ATTEMPTS, c2_start
+
+
+def record_pair(seed: int = 0, periods: float = 40.0, alpha_max_deg: float = 90.0, preset: str = 'feedback',
+                base: tuple[float, float, float, tuple[float, float]] = C2_START) -> CollisionRecord:
+    """Run the seed's C2 start open loop for ``periods`` and record every physics step."""
+    from smarticle_common.pairs import pair_coordinates
+    from smarticle_sim.errors import SceneError
+    from smarticle_sim.runner import Runner
+    from smarticle_sim.scenes import pair_scene
+    from smarticle_sim.settings import SimConfig
+
+    config = SimConfig.from_preset(preset)
+    gait = GaitConfig.from_degrees(alpha_max_deg, servo_speed=config.robot.servo_speed)
+    for attempt in range(START_ATTEMPTS):
+        r, theta, phi = c2_start(seed, base, attempt=attempt)
+        try:
+            scene = pair_scene(config.robot, gait, r, math.radians(theta), math.radians(phi), phases=base[3])
+            break
+        except SceneError:
+            continue
+    else:
+        raise SceneError(f'seed {seed}: no admissible C2 start near {base[:3]}')
+    times: list[float] = []
+    fsr: list[np.ndarray] = []
+    links: list[np.ndarray] = []
+    poses: list[np.ndarray] = []
+
+    def on_step(run: Runner) -> None:
+        ph = run.physics
+        times.append(ph.time)
+        fsr.append(ph.fsr())
+        links.append(ph.link_contacts(0, 1))
+        poses.append(ph.poses().copy())
+
+    with Runner.with_gaits(config, scene) as runner:
+        runner.step_hooks.append(on_step)
+        assert runner.gaits is not None
+        runner.gaits.start(0.0)
+        runner.run(runner.ticks_for(periods * gait.period))
+    coords = pair_coordinates(np.asarray(poses))
+    return CollisionRecord(np.asarray(times), np.asarray(fsr), np.asarray(links),
+                           coords.r[:, 0] / config.robot.body_length, gait.period,
+                           (float(base[3][0]), float(base[3][1])))
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of `smarticle-c2-collisions`: event table and signature on stdout; CSV, PNG, npz in --out."""
+    parser = argparse.ArgumentParser(prog='smarticle-c2-collisions', description=__doc__.split('\n')[0])
+    parser.add_argument('--seed', type=int, default=0)
+    parser.add_argument('--periods', type=float, default=40.0)
+    parser.add_argument('--alpha', type=float, default=90.0, help='alpha_max (deg)')
+    parser.add_argument('--rows', type=int, default=24, help='events shown in the table on stdout')
+    parser.add_argument('--out', default='out/feedback/c2', help='output folder')
+    args = parser.parse_args(argv)
+    out = Path(args.out)
+    rec = record_pair(args.seed, args.periods, args.alpha)
+    rec.save(out / 'c2_steps.npz')
+    events = find_events(rec)
+    write_events_csv(events, out / 'c2_events.csv')
+    plot_events(rec, events, out / 'c2_events.png', (0.0, min(4.0, args.periods)))
+    sys.stdout.write(format_events(events, limit=args.rows) + '\n\n' + format_signature(signature(events)) + '\n')
+    sys.stdout.write(f'\n{len(events)} events in {args.periods:g} periods (seed {args.seed}); files in {out}/\n')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
