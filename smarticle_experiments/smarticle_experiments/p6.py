@@ -69,6 +69,7 @@ class PairTrial:
     start: tuple[float, float, float] = (0.0, 0.0, 0.0)
     trouble: str = ''
     wall: float = 0.0
+    travel_w: float = 0.0              # centre-of-mass displacement over the bound run (W = BL)
 
 
 def c2_start(seed: int, base: tuple[float, float, float, tuple[float, float]] = C2_START,
@@ -147,6 +148,10 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
     trial.phi = coords.phi[:, 0]
     trial.lifetime_periods, trial.censored = pair_lifetime(recording.time, recording.poses, gait.period,
                                                           config.robot.body_length, r_bind_bl, t0=start_time)
+    com = recording.poses[:, :, :2].mean(axis=1)
+    end = int(np.searchsorted(recording.time, start_time + trial.lifetime_periods * gait.period))
+    end = min(max(end, 0), len(com) - 1)
+    trial.travel_w = float(np.linalg.norm(com[end] - com[0]) / config.robot.body_length)
     trial.wall = time.perf_counter() - wall0
     return trial
 
@@ -189,18 +194,94 @@ def summarize(trials: Sequence[PairTrial], periods: float) -> list[dict[str, obj
                      'se_lifetime': float(life.std(ddof=1) / math.sqrt(len(life))) if len(life) > 1 else math.nan,
                      'median_lifetime': float(np.median(life)),
                      'censored': sum(t.censored for t in group), 'halts_per_period': float(halts.mean()),
+                     'travel_w': float(np.mean([t.travel_w for t in group])),
+                     'se_travel_w': float(np.std([t.travel_w for t in group], ddof=1) / math.sqrt(len(group)))
+                     if len(group) > 1 else math.nan,
                      'trouble': sum(bool(t.trouble) for t in group)})
     return rows
+
+
+def kaplan_meier(lifetimes: Sequence[float], censored: Sequence[bool]) -> tuple[np.ndarray, np.ndarray]:
+    """Kaplan-Meier survival: (times, S(t) just after each time), starting at (0, 1)."""
+    life = np.asarray(lifetimes, dtype=float)
+    cens = np.asarray(censored, dtype=bool)
+    times, surv, s = [0.0], [1.0], 1.0
+    for t in np.unique(life[~cens]):
+        at_risk = int((life >= t).sum())
+        events = int(((life == t) & ~cens).sum())
+        s *= 1.0 - events / at_risk
+        times.append(float(t))
+        surv.append(s)
+    return np.asarray(times), np.asarray(surv)
+
+
+def logrank_test(a: Sequence[PairTrial], b: Sequence[PairTrial]) -> tuple[float, float]:
+    """Log-rank test of two groups' lifetimes with censoring (scipy.stats.logrank): (statistic, p)."""
+    from scipy.stats import CensoredData, logrank
+
+    def data(group: Sequence[PairTrial]) -> CensoredData:
+        life = np.array([t.lifetime_periods for t in group], dtype=float)
+        cens = np.array([t.censored for t in group], dtype=bool)
+        return CensoredData(uncensored=life[~cens], right=life[cens])
+
+    res = logrank(data(a), data(b))
+    return float(res.statistic), float(res.pvalue)
+
+
+def plot_survival(trials: Sequence[PairTrial], path: Path, periods: float) -> Path:
+    """Kaplan-Meier curve of the C2 lifetime of each condition (censored at the end of the run)."""
+    import matplotlib
+
+    matplotlib.use('Agg')
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(7, 4.5), dpi=110)
+    ax = fig.add_subplot(1, 1, 1)
+    for cond in dict.fromkeys(t.condition for t in trials):
+        group = [t for t in trials if t.condition == cond]
+        times, surv = kaplan_meier([t.lifetime_periods for t in group], [t.censored for t in group])
+        ax.step(np.append(times, periods), np.append(surv, surv[-1]), where='post',
+                label=f'{cond.label} (n = {len(group)})')
+    ax.set_xlabel('C2 lifetime (gait periods)')
+    ax.set_ylabel('fraction still bound (Kaplan-Meier)')
+    ax.set_xscale('symlog', linthresh=1.0)
+    ax.set_title(f'C2 survival; runs censored at {periods:g} periods', fontsize=10)
+    ax.legend(fontsize=8)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    return path
+
+
+def plot_transport(trials: Sequence[PairTrial], path: Path) -> Path:
+    """Travel of the pair's centre of mass over its bound run against its lifetime, per condition (Fig. S8)."""
+    import matplotlib
+
+    matplotlib.use('Agg')
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(7, 4.5), dpi=110)
+    ax = fig.add_subplot(1, 1, 1)
+    for cond in dict.fromkeys(t.condition for t in trials):
+        group = [t for t in trials if t.condition == cond]
+        ax.scatter([t.lifetime_periods for t in group], [t.travel_w for t in group], s=12, alpha=0.7,
+                   label=f'{cond.label}: mean {np.mean([t.travel_w for t in group]):.2f} W')
+    ax.set_xlabel('C2 lifetime (gait periods)')
+    ax.set_ylabel('centre-of-mass travel while bound (W)')
+    ax.set_title('C2 transport (Fig. S8): travel over the bound run', fontsize=10)
+    ax.legend(fontsize=8)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    return path
 
 
 def format_summary(rows: Sequence[dict[str, object]], periods: float) -> str:
     """Markdown table of ``summarize`` rows."""
     out = [f'| condition | n | lifetime mean +- SE (periods) | median | reached the end ({periods:g}) | '
-           'halts / period | trouble |', '| --- | ---: | ---: | ---: | ---: | ---: | ---: |']
+           'halts / period | travel +- SE (W) | trouble |', '| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |']
     for row in rows:
         out.append(f'| {row["condition"]} | {row["n"]} | {row["mean_lifetime"]:.1f} +- {row["se_lifetime"]:.1f} | '
                    f'{row["median_lifetime"]:.0f} | {row["censored"]} | {row["halts_per_period"]:.2f} | '
-                   f'{row["trouble"]} |')
+                   f'{row["travel_w"]:.2f} +- {row["se_travel_w"]:.2f} | {row["trouble"]} |')
     return '\n'.join(out)
 
 
@@ -256,9 +337,9 @@ def plot_lifetimes(trials: Sequence[PairTrial], path: Path, periods: float) -> P
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of `smarticle-p6`: table on stdout, CSV and PNGs in --out."""
     parser = argparse.ArgumentParser(prog='smarticle-p6', description=__doc__.split('\n')[0])
-    parser.add_argument('--seeds', type=int, default=20)
+    parser.add_argument('--seeds', type=int, default=40)
     parser.add_argument('--periods', type=float, default=100.0)
-    parser.add_argument('--open-loop', type=float, nargs='+', default=[70.0, 80.0, 90.0],
+    parser.add_argument('--open-loop', type=float, nargs='+', default=[70.0, 80.0, 85.0, 90.0],
                         help='open-loop amplitudes (deg)')
     parser.add_argument('--feedback', type=float, nargs='+', default=[90.0], help='feedback amplitudes (deg)')
     parser.add_argument('--jobs', type=int, default=2, help='parallel processes (at most 2 here)')
@@ -276,17 +357,24 @@ def main(argv: Sequence[str] | None = None) -> int:
     with (out / 'p6_trials.csv').open('w', newline='') as handle:
         writer = csv.writer(handle)
         writer.writerow(['condition', 'seed', 'r0_bl', 'theta0_deg', 'phi0_deg', 'lifetime_periods', 'censored',
-                         'halts', 'final_r_bl', 'trouble'])
+                         'halts', 'final_r_bl', 'travel_w', 'trouble'])
         for t in trials:
             writer.writerow([t.condition.label, t.seed, f'{t.start[0]:.4f}', f'{t.start[1]:.2f}', f'{t.start[2]:.2f}',
-                             t.lifetime_periods, t.censored, len(t.halts), f'{t.r[-1]:.3f}', t.trouble])
+                             t.lifetime_periods, t.censored, len(t.halts), f'{t.r[-1]:.3f}', f'{t.travel_w:.3f}',
+                             t.trouble])
     with (out / 'p6_summary.csv').open('w', newline='') as handle:
         summary_writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
         summary_writer.writeheader()
         summary_writer.writerows(rows)
     plot_traces(trials, out / 'p6_r_traces.png')
     plot_lifetimes(trials, out / 'p6_lifetimes.png', args.periods)
+    plot_survival(trials, out / 'p6_survival.png', args.periods)
+    plot_transport(trials, out / 'p6_transport.png')
     sys.stdout.write(format_summary(rows, args.periods) + '\n')
+    for a in (c for c in conditions if c.feedback):
+        for b in (c for c in conditions if not c.feedback and c.alpha_max_deg == a.alpha_max_deg):
+            stat, p = logrank_test([t for t in trials if t.condition == b], [t for t in trials if t.condition == a])
+            sys.stdout.write(f'log-rank {b.label} vs {a.label}: statistic {stat:.3f}, p = {p:.3g}\n')
     sys.stdout.write(f'\n{len(trials)} trials in {time.perf_counter() - wall:.0f} s; files in {out}/\n')
     return 0
 
