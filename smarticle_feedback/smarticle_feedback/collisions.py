@@ -115,13 +115,13 @@ class CollisionEvent:
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     """(first, last) indices of each run of True in ``mask``."""
     edges = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
-    return list(zip(np.flatnonzero(edges == 1).tolist(), (np.flatnonzero(edges == -1) - 1).tolist()))
+    return list(zip(np.flatnonzero(edges == 1).tolist(), (np.flatnonzero(edges == -1) - 1).tolist(), strict=True))
 
 
 def find_events(rec: CollisionRecord, merge_gap: float = MERGE_GAP, settle: float = SETTLE,
                 dr_tolerance: float = DR_TOLERANCE) -> list[CollisionEvent]:
     """Every contact event of the record, in time order."""
-    touching = rec.links.any(axis=(1, 2))
+    touching = np.asarray(rec.links.any(axis=(1, 2)), dtype=bool)
     runs = _runs(touching)
     merged: list[tuple[int, int]] = []
     for first, last in runs:
@@ -139,7 +139,7 @@ def find_events(rec: CollisionRecord, merge_gap: float = MERGE_GAP, settle: floa
         taus = [(t_peak - rec.start_time) / rec.period + p for p in rec.phases]
         quarters = (int(math.floor(4.0 * taus[0])) % 4, int(math.floor(4.0 * taus[1])) % 4)
         periods = (int(math.floor(taus[0])), int(math.floor(taus[1])))
-        touched = rec.links[seg].any(axis=0)
+        touched = np.asarray(rec.links[seg].any(axis=0), dtype=bool)
         links = tuple(f'{LINKS[i]}>{LINKS[j]}' for i in range(3) for j in range(3) if touched[i, j])
         enveloped = bool((touched[1, 0] and touched[2, 0]) or (touched[0, 1] and touched[0, 2]))
         before = max(first - 1, 0)

@@ -285,7 +285,8 @@ def main_events(path: str, floor: float) -> int:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of `smarticle-feedback-calibrate`: table on stdout, PNG next to the input (or --png)."""
     parser = argparse.ArgumentParser(prog='smarticle-feedback-calibrate', description=__doc__.split('\n')[0])
-    parser.add_argument('recording', help='c2_steps.npz of `smarticle-c2-collisions` (per-face windows from the compression signature), or an npz of `smarticle-sim run ... --fsr` (percentile window)')
+    parser.add_argument('recording', help='c2_steps.npz of `smarticle-c2-collisions` (per-face windows from the '
+                        'compression signature), or an npz of `smarticle-sim run ... --fsr` (percentile window)')
     parser.add_argument('--png', help='figure path (default: <recording>_window.png)')
     parser.add_argument('--floor', type=float, default=DEFAULT_FLOOR, help='ignore forces below this (N)')
     parser.add_argument('--low', type=float, default=80.0, help='percentile of f_min (default 80)')

@@ -35,12 +35,13 @@ DEFAULT_WINDOWS: dict[str, tuple[float, float, bool]] = {
 def _face_params() -> tuple[ParamSpec, ...]:
     specs: list[ParamSpec] = []
     for face in topics.FSR_FACES:
+        f_min, f_max, enabled = DEFAULT_WINDOWS[face]
         specs += [
-            ParamSpec(f'{face}_min', DEFAULT_WINDOWS[face][0], f'impact window of {face}: lowest force (N)', 0.0, 1000.0,
+            ParamSpec(f'{face}_min', f_min, f'impact window of {face}: lowest force (N)', 0.0, 1000.0,
                       runtime=True),
-            ParamSpec(f'{face}_max', DEFAULT_WINDOWS[face][1], f'impact window of {face}: highest force (N)', 0.0, 1000.0,
+            ParamSpec(f'{face}_max', f_max, f'impact window of {face}: highest force (N)', 0.0, 1000.0,
                       runtime=True),
-            ParamSpec(f'{face}_enabled', DEFAULT_WINDOWS[face][2], f'whether an impact on {face} halts the arms', runtime=True),
+            ParamSpec(f'{face}_enabled', enabled, f'whether an impact on {face} halts the arms', runtime=True),
         ]
     return tuple(specs)
 
