@@ -70,6 +70,8 @@ class PairTrial:
     trouble: str = ''
     wall: float = 0.0
     travel_w: float = 0.0              # centre-of-mass displacement over the bound run (W = BL)
+    #: With ``record_samples``: the FSR samples the controllers saw, (time, forces (2, 4) N) per tick.
+    samples: list[tuple[float, np.ndarray]] = field(default_factory=list)
 
 
 def c2_start(seed: int, base: tuple[float, float, float, tuple[float, float]] = C2_START,
@@ -102,7 +104,7 @@ def pair_lifetime(times: np.ndarray, poses: np.ndarray, period: float, body_leng
 def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: FeedbackConfig | None = None,
                    preset: str = 'feedback', start_time: float = 0.0,
                    base: tuple[float, float, float, tuple[float, float]] = C2_START,
-                   r_bind_bl: float = R_BIND_BL, sample_every: int = 3) -> PairTrial:
+                   r_bind_bl: float = R_BIND_BL, sample_every: int = 3, record_samples: bool = False) -> PairTrial:
     """Run one C2 pair for ``periods`` gait periods, with the impact controller when ``condition.feedback``."""
     from smarticle_sim.batch import run_trial
     from smarticle_sim.errors import SceneError
@@ -134,7 +136,7 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
         policies = {k: ImpactController(replace(fb, period=gait.period, phase=p)) for k, p in enumerate(base[3])}
         for policy in policies.values():
             policy.start(start_time)
-        feedback_controllers.append(FeedbackController(gaits, policies))
+        feedback_controllers.append(FeedbackController(gaits, policies, record=record_samples))
         return feedback_controllers
 
     recording = run_trial(config, scene, periods, sample_every=sample_every, controllers=add_feedback,
@@ -143,6 +145,7 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
                       trouble=recording.trouble)
     if feedback_controllers:
         trial.halts = list(feedback_controllers[0].halts)
+        trial.samples = list(feedback_controllers[0].samples or [])
     coords = pair_coordinates(recording.poses)
     trial.r = coords.r[:, 0] / config.robot.body_length
     trial.phi = coords.phi[:, 0]

@@ -301,7 +301,8 @@ class FeedbackController:
     of the interval is the sim's stand-in for it (docs/feedback.md). Without ``peak_hold``: the instant.
     """
 
-    def __init__(self, gaits: GaitController, policies: Mapping[int, FeedbackPolicy], peak_hold: bool = True) -> None:
+    def __init__(self, gaits: GaitController, policies: Mapping[int, FeedbackPolicy], peak_hold: bool = True,
+                 record: bool = False) -> None:
         self.gaits = gaits
         self.policies = dict(policies)
         self._robots = sorted(self.policies)
@@ -309,6 +310,8 @@ class FeedbackController:
         self.peak_hold = peak_hold
         self._peak: np.ndarray | None = None
         self._attached = False
+        #: With ``record``: every sample given to the policies, as (time, forces (robots, 4)).
+        self.samples: list[tuple[float, np.ndarray]] | None = [] if record else None
 
     def _on_step(self, runner: Runner) -> None:
         forces = self.gaits.physics.fsr(self._robots)
@@ -323,6 +326,8 @@ class FeedbackController:
             self._attached = True
         forces = physics.fsr(self._robots) if self._peak is None else self._peak
         self._peak = None
+        if self.samples is not None:
+            self.samples.append((now, np.array(forces)))
         for row, k in enumerate(self._robots):
             decision = self.policies[k].update(now, forces[row])
             if decision.halt and self.gaits.halt(k):

@@ -83,3 +83,48 @@ def test_impact_windows_change_at_once_and_bad_changes_are_refused(nodes: Any, r
     assert press(13.0, 11.0) == 3
     assert set_parameter(probe, target, 'arm1_front_enabled', False) == (True, '')
     assert press(14.0, 11.0) == 3
+
+
+def test_a_recorded_c2_force_trace_halts_the_hardware_path_at_the_batch_periods(nodes: Any, ros_node: Any,
+                                                                                 tmp_path: Path) -> None:
+    """Robot 0's FSR samples of a batch feedback run, played as voltages into the emulator in real time."""
+    import math
+    import threading
+
+    from smarticle_common.topics import FSR_FACES
+    from smarticle_experiments.p6 import Condition, run_pair_trial
+
+    from tests.helpers.hardware_rig import FSR_CHANNEL, volts_for
+
+    period, periods = 1.6, 5
+    batch = run_pair_trial(Condition(90.0, True), 0, periods, record_samples=True)
+    expected = sorted({math.floor(t / period) for t, robot, _ in batch.halts if robot == 0})
+    assert len(expected) >= 2, batch.halts
+    tick = batch.samples[1][0] - batch.samples[0][0]
+    trace = [(t, [volts_for(face, f) if f > 0.05 else 0.0 for face, f in zip(FSR_FACES, forces[0], strict=True)])
+             for t, forces in batch.samples if forces[0].max() > 0.05]
+
+    with running_emulator(tmp_path / 'maestro') as emulator:
+        probe = ros_node('feedback_trace_probe')
+        rig = HardwareRig(nodes, emulator, probe, period=period, alpha_max_deg=90.0)
+        logs = lambda: ''.join(nodes.output(p) for p in (rig.bridge, rig.gait, rig.feedback))  # noqa: E731
+        assert spin_until(probe, rig.ready, 20.0), logs()
+        t0 = rig.start(1.0)
+
+        def play() -> None:
+            for t, volts in trace:       # each tick's sample held for one control tick (the bridge reads at 100 Hz)
+                time.sleep(max(0.0, t0 + t - time.time()))
+                for face, v in zip(FSR_FACES, volts, strict=True):
+                    emulator.set_voltage(FSR_CHANNEL[face], v)
+                time.sleep(tick)
+                for face in FSR_FACES:
+                    emulator.set_voltage(FSR_CHANNEL[face], 0.0)
+
+        player = threading.Thread(target=play, daemon=True)
+        player.start()
+        spin_until(probe, lambda: time.time() >= t0 + periods * period + 0.2, periods * period + 10.0)
+        player.join(timeout=5.0)
+        got = sorted(math.floor((stamp - t0) / period) for stamp, _, _ in rig.observed.halts)
+        assert got == expected, (got, expected, batch.halts, logs())
+        for stamp, _, _ in rig.observed.halts:       # the gait answered each halt with a hold command
+            assert any(stamp - 0.001 <= c <= stamp + 0.2 for c, _, _ in rig.observed.commands), stamp
