@@ -18,7 +18,7 @@ import csv
 import math
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -104,8 +104,12 @@ def pair_lifetime(times: np.ndarray, poses: np.ndarray, period: float, body_leng
 def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: FeedbackConfig | None = None,
                    preset: str = 'feedback', start_time: float = 0.0,
                    base: tuple[float, float, float, tuple[float, float]] = C2_START,
-                   r_bind_bl: float = R_BIND_BL, sample_every: int = 3, record_samples: bool = False) -> PairTrial:
-    """Run one C2 pair for ``periods`` gait periods, with the impact controller when ``condition.feedback``."""
+                   r_bind_bl: float = R_BIND_BL, sample_every: int = 3, record_samples: bool = False,
+                   robot_changes: Mapping[str, float] | None = None) -> PairTrial:
+    """Run one C2 pair for ``periods`` gait periods, with the impact controller when ``condition.feedback``.
+
+    ``robot_changes`` replaces fields of the preset's ``RobotSpec`` (the sensitivity study of the assumed values).
+    """
     from smarticle_sim.batch import run_trial
     from smarticle_sim.errors import SceneError
     from smarticle_sim.physics import Physics
@@ -116,6 +120,8 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
 
     wall0 = time.perf_counter()
     config = SimConfig.from_preset(preset)
+    if robot_changes:
+        config = replace(config, robot=replace(config.robot, **dict(robot_changes)))  # type: ignore[arg-type]
     gait = GaitConfig.from_degrees(condition.alpha_max_deg, servo_speed=config.robot.servo_speed)
     for attempt in range(START_ATTEMPTS):
         r, theta, phi = c2_start(seed, base, attempt=attempt)
