@@ -202,6 +202,34 @@ class SimBridgeCore:
         self.ticks_per_publish = settings.ticks_per_publish
         self._camera: OverheadCamera | None = None
         self._next_frame_ns = 0
+        self._fsr_watch: list[int] = []
+        self._fsr_peak: np.ndarray | None = None
+
+    def _fsr_step(self, _: Runner) -> None:
+        forces = self.physics.fsr(self._fsr_watch)
+        self._fsr_peak = forces if self._fsr_peak is None else np.maximum(self._fsr_peak, forces)
+
+    def fsr_sample(self, robots: list[int]) -> np.ndarray:
+        """(len(robots), 4) FSR sample of ``robots``: each face's peak force since the previous sample.
+
+        The same sample as the batch path's ``FeedbackController`` (collisions are kicks shorter than a
+        control tick). The peak is tracked for the robots of the previous call; for others (a new
+        listener) the sample is the force at this instant. With nobody to sample (``robots`` empty) the
+        per-step hook is removed and the physics steps a tick at once again.
+        """
+        now = self.physics.fsr(robots)
+        if self._fsr_peak is not None:
+            for row, k in enumerate(robots):
+                if k in self._fsr_watch:
+                    now[row] = np.maximum(now[row], self._fsr_peak[self._fsr_watch.index(k)])
+        self._fsr_watch = list(robots)
+        self._fsr_peak = None
+        hooked = self._fsr_step in self.runner.step_hooks
+        if robots and not hooked:
+            self.runner.step_hooks.append(self._fsr_step)
+        elif not robots and hooked:
+            self.runner.step_hooks.remove(self._fsr_step)
+        return now
 
     @property
     def time(self) -> float:

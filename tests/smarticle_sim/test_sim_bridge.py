@@ -70,6 +70,34 @@ def test_core_barrier_waits_for_every_robot_and_drops_bad_commands() -> None:
         core.close()
 
 
+def test_fsr_samples_hold_the_peak_of_each_publish_period() -> None:
+    """The bridge's FSR sample is the peak since the last one (as in the batch feedback path), not the instant."""
+    settings = BridgeSettings.defaults(scene='pair', preset='feedback', pair_r=1.3, pair_theta_deg=0.0,
+                                       pair_phi_deg=350.0, pair_phase_1=0.25, publish_period=1.0 / 60.0)
+    core = SimBridgeCore(settings)
+    gaits = [SquareGait(GaitConfig.from_degrees(90.0, phase=p)) for p in (0.0, 0.25)]
+    for gait in gaits:
+        gait.start(0.0)
+    held, instant = [], []
+    try:
+        core.fsr_sample([0, 1])
+        for _ in range(2 * 96):                          # two gait periods of control ticks
+            for k, gait in enumerate(gaits):
+                cmd = gait.command(core.time_ns * 1e-9)
+                core.apply_command(k, list(topics.JOINT_NAMES), list(cmd.targets), [cmd.speed] * 2, core.time_ns)
+            core.advance()
+            instant.append(core.physics.fsr([0, 1]))
+            held.append(core.fsr_sample([0, 1]))
+        assert core.runner.step_hooks
+        core.fsr_sample([])
+        assert not core.runner.step_hooks, 'nobody listens: no per-step FSR work'
+    finally:
+        core.close()
+    held_arr, instant_arr = np.array(held), np.array(instant)
+    assert np.all(held_arr >= instant_arr)
+    assert (held_arr.max(axis=(1, 2)) > 1.0).sum() > (instant_arr.max(axis=(1, 2)) > 1.0).sum()
+
+
 def test_core_is_deterministic_for_the_same_seed() -> None:
     runs = []
     for _ in range(2):
