@@ -96,6 +96,7 @@ class CollisionEvent:
     r_after: float                   # BL
     enveloped: bool                  # both arms of one robot touched the other's body
     kind: str                        # 'compression', 'bracing' or 'neutral'
+    steps: int = 1                   # physics steps in contact
 
     @property
     def dr(self) -> float:
@@ -152,19 +153,20 @@ def find_events(rec: CollisionRecord, merge_gap: float = MERGE_GAP, settle: floa
         dr = r_after - r_before
         kind = 'compression' if dr > dr_tolerance else 'bracing' if dr < -dr_tolerance else 'neutral'
         events.append(CollisionEvent(n, float(times[first]), float(times[last]), t_peak, quarters, periods, links,
-                                     rec.fsr[seg].max(axis=0), r_before, r_after, enveloped, kind))
+                                     rec.fsr[seg].max(axis=0), r_before, r_after, enveloped, kind,
+                                     int(touching[seg].sum())))
     return events
 
 
 def format_events(events: Sequence[CollisionEvent], floor: float = 0.05, limit: int | None = None) -> str:
     """Markdown table: one row per event (the paper's Fig. 4a/b as a table)."""
-    head = ('| # | t (s) | period | quarter 0 / 1 | ms | links (robot 0 > robot 1) | enveloped | '
+    head = ('| # | t (s) | period | quarter 0 / 1 | steps | links (robot 0 > robot 1) | enveloped | '
             + ' | '.join(f'{k}:{f}' for k in range(2) for f in FSR_FACES) + ' | dr (BL) | kind |')
     rows = [head, '| ' + ' | '.join(['---:'] * 5 + ['---', '---'] + ['---:'] * 9 + ['---']) + ' |']
     for ev in events[:limit]:
         forces = ' | '.join(f'{v:.2f}' if v > floor else '' for v in ev.peaks.ravel())
         rows.append(f'| {ev.index} | {ev.t_peak:.3f} | {ev.periods[0]} | {ev.quarters[0]} / {ev.quarters[1]} | '
-                    f'{1e3 * ev.duration:.0f} | {" ".join(ev.links)} | {"yes" if ev.enveloped else ""} | {forces} | '
+                    f'{ev.steps} | {" ".join(ev.links)} | {"yes" if ev.enveloped else ""} | {forces} | '
                     f'{ev.dr:+.4f} | {ev.kind} |')
     return '\n'.join(rows)
 
@@ -175,12 +177,12 @@ def write_events_csv(events: Sequence[CollisionEvent], path: str | Path) -> Path
     path.parent.mkdir(parents=True, exist_ok=True)
     with path.open('w', newline='') as handle:
         writer = csv.writer(handle)
-        writer.writerow(['index', 't_start', 't_end', 't_peak', 'period0', 'quarter0', 'quarter1', 'links',
+        writer.writerow(['index', 't_start', 't_end', 't_peak', 'steps', 'period0', 'quarter0', 'quarter1', 'links',
                          'enveloped', *[f'peak{k}_{f}' for k in range(2) for f in FSR_FACES], 'r_before',
                          'r_after', 'dr', 'kind'])
         for ev in events:
-            writer.writerow([ev.index, f'{ev.t_start:.5f}', f'{ev.t_end:.5f}', f'{ev.t_peak:.5f}', ev.periods[0],
-                             ev.quarters[0], ev.quarters[1], ' '.join(ev.links), int(ev.enveloped),
+            writer.writerow([ev.index, f'{ev.t_start:.5f}', f'{ev.t_end:.5f}', f'{ev.t_peak:.5f}', ev.steps,
+                             ev.periods[0], ev.quarters[0], ev.quarters[1], ' '.join(ev.links), int(ev.enveloped),
                              *[f'{v:.4f}' for v in ev.peaks.ravel()], f'{ev.r_before:.5f}', f'{ev.r_after:.5f}',
                              f'{ev.dr:.5f}', ev.kind])
     return path

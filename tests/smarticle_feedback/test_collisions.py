@@ -34,7 +34,8 @@ def test_events_carry_quarter_links_peaks_and_dr() -> None:
     assert len(events) == 3                             # the kicks 5 ms apart are one event
     first, second, third = events
     assert first.kind == 'compression' and first.quarters == (0, 1) and first.links == ('arm1>body',)
-    assert first.peaks[0, 0] == 9.0 and first.dr == pytest.approx(0.03)
+    assert first.peaks[0, 0] == 9.0 and first.dr == pytest.approx(0.03) and first.steps == 1
+    assert second.steps == 2
     assert second.kind == 'bracing' and second.quarters == (1, 2) and second.peaks[0, 2] == 3.0
     assert third.kind == 'neutral' and third.quarters == (2, 3)
     sig = signature(events)
