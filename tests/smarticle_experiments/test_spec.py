@@ -20,7 +20,7 @@ def test_every_shipped_spec_loads_and_expands() -> None:
     counts = {name: len(load_spec(name).trials(CODE)) for name in names}
     assert counts['p1'] == 151
     assert counts['p4'] == 2 * 12 * 12
-    assert counts['p6'] == (3 + 1) * 20          # two grid blocks: open loop 70/80/90, feedback 90
+    assert counts['p6'] == (4 + 1) * 40          # two grid blocks: open loop 70/80/85/90, feedback 90
 
 
 def test_p2_and_p3_reuse_the_p1_trials() -> None:
