@@ -22,12 +22,16 @@ from collections.abc import Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from smarticle_common.facts import GAIT_PERIOD, R_BIND_BL
 from smarticle_common.gait import GaitConfig
 
 from smarticle_feedback.controller import FeedbackConfig, ImpactController
+
+if TYPE_CHECKING:
+    from smarticle_sim.runner import Runner
 
 #: The C2 start of the feedback robot (r in BL, theta, phi in deg, phases): with robot 2 a quarter period
 #: ahead (the paper's basin-scan phase p = 0.25) the pair collides every half cycle (docs/feedback.md). A
@@ -72,6 +76,27 @@ class PairTrial:
     travel_w: float = 0.0              # centre-of-mass displacement over the bound run (W = BL)
     #: With ``record_samples``: the FSR samples the controllers saw, (time, forces (2, 4) N) per tick.
     samples: list[tuple[float, np.ndarray]] = field(default_factory=list)
+    #: With ``count_contacts``: the gait periods in which the robots touched (any physics step).
+    contact_periods: list[int] = field(default_factory=list)
+
+
+class ContactPeriods:
+    """A controller that only watches: the gait periods in which robots 0 and 1 touch at any physics step."""
+
+    def __init__(self, period: float, start_time: float = 0.0) -> None:
+        self.period, self.start_time = period, start_time
+        self.periods: set[int] = set()
+        self._attached = False
+
+    def _on_step(self, runner: Runner) -> None:
+        if runner.physics.link_contacts(0, 1).any():
+            self.periods.add(math.floor((runner.time - self.start_time) / self.period))
+
+    def before_tick(self, runner: Runner) -> None:
+        """Attach the step hook at the first tick."""
+        if not self._attached:
+            runner.step_hooks.append(self._on_step)
+            self._attached = True
 
 
 def c2_start(seed: int, base: tuple[float, float, float, tuple[float, float]] = C2_START,
@@ -105,10 +130,12 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
                    preset: str = 'feedback', start_time: float = 0.0,
                    base: tuple[float, float, float, tuple[float, float]] = C2_START,
                    r_bind_bl: float = R_BIND_BL, sample_every: int = 3, record_samples: bool = False,
-                   robot_changes: Mapping[str, float] | None = None) -> PairTrial:
+                   robot_changes: Mapping[str, float] | None = None, count_contacts: bool = False) -> PairTrial:
     """Run one C2 pair for ``periods`` gait periods, with the impact controller when ``condition.feedback``.
 
     ``robot_changes`` replaces fields of the preset's ``RobotSpec`` (the sensitivity study of the assumed values).
+    ``count_contacts`` lists the gait periods in which the robots touched at any physics step
+    (``PairTrial.contact_periods``; a step hook, the trajectory is the same).
     """
     from smarticle_sim.batch import run_trial
     from smarticle_sim.errors import SceneError
@@ -135,20 +162,25 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
                          f'in {START_ATTEMPTS} draws')
     feedback_controllers: list[FeedbackController] = []
 
+    counter = ContactPeriods(gait.period, start_time) if count_contacts else None
+
     def add_feedback(_: Physics, gaits: GaitController) -> Sequence[Controller]:
+        extra: list[Controller] = [counter] if counter is not None else []
         if not condition.feedback:
-            return []
+            return extra
         fb = feedback or default_feedback_config()
         policies = {k: ImpactController(replace(fb, period=gait.period, phase=p)) for k, p in enumerate(base[3])}
         for policy in policies.values():
             policy.start(start_time)
         feedback_controllers.append(FeedbackController(gaits, policies, record=record_samples))
-        return feedback_controllers
+        return [*extra, *feedback_controllers]
 
     recording = run_trial(config, scene, periods, sample_every=sample_every, controllers=add_feedback,
                           start_time=start_time)
     trial = PairTrial(condition, seed, recording.time, np.empty(0), np.empty(0), start=(r, theta, phi),
                       trouble=recording.trouble)
+    if counter is not None:
+        trial.contact_periods = sorted(counter.periods)
     if feedback_controllers:
         trial.halts = list(feedback_controllers[0].halts)
         trial.samples = list(feedback_controllers[0].samples or [])
@@ -172,14 +204,15 @@ def default_feedback_config() -> FeedbackConfig:
     return config_from_values(default_values())
 
 
-def _run(args: tuple[Condition, int, float]) -> PairTrial:
-    return run_pair_trial(*args)
+def _run(args: tuple[Condition, int, float, bool]) -> PairTrial:
+    condition, seed, periods, contacts = args
+    return run_pair_trial(condition, seed, periods, count_contacts=contacts)
 
 
 def run_p6(conditions: Sequence[Condition], seeds: Sequence[int], periods: float, jobs: int = 2,
-           progress: bool = True) -> list[PairTrial]:
+           progress: bool = True, contacts: bool = False) -> list[PairTrial]:
     """Every (condition, seed) trial, ``jobs`` processes in parallel (at most 2 on the shared machine)."""
-    work = [(c, s, periods) for c in conditions for s in seeds]
+    work = [(c, s, periods, contacts) for c in conditions for s in seeds]
     trials: list[PairTrial] = []
     with ProcessPoolExecutor(max_workers=max(1, jobs)) as pool:
         for trial in pool.map(_run, work):
@@ -283,6 +316,23 @@ def plot_transport(trials: Sequence[PairTrial], path: Path) -> Path:
     return path
 
 
+def format_contacts(trials: Sequence[PairTrial], periods: float) -> str:
+    """Markdown table: periods in which the robots touched, all and second half, mean +- SE per condition."""
+    out = ['| condition | n | periods with contact, mean +- SE | in the second half | final r (BL), median |',
+           '| --- | ---: | ---: | ---: | ---: |']
+    for cond in dict.fromkeys(t.condition for t in trials):
+        group = [t for t in trials if t.condition == cond]
+        cells = []
+        for values in ([len(t.contact_periods) for t in group],
+                       [sum(q >= periods / 2 for q in t.contact_periods) for t in group]):
+            v = np.asarray(values, dtype=float)
+            se = v.std(ddof=1) / math.sqrt(v.size) if v.size > 1 else math.nan
+            cells.append(f'{v.mean():.1f} +- {se:.1f}')
+        out.append(f'| {cond.label} | {len(group)} | {cells[0]} | {cells[1]} | '
+                   f'{np.median([t.r[-1] for t in group]):.2f} |')
+    return '\n'.join(out)
+
+
 def format_summary(rows: Sequence[dict[str, object]], periods: float) -> str:
     """Markdown table of ``summarize`` rows."""
     out = [f'| condition | n | lifetime mean +- SE (periods) | median | reached the end ({periods:g}) | '
@@ -353,6 +403,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument('--feedback', type=float, nargs='+', default=[90.0], help='feedback amplitudes (deg)')
     parser.add_argument('--jobs', type=int, default=2, help='parallel processes (at most 2 here)')
     parser.add_argument('--out', default='out/feedback', help='output folder')
+    parser.add_argument('--contacts', action='store_true',
+                        help='also count the periods in which the robots touch (a step hook per trial)')
     parser.add_argument('--quick', action='store_true', help='3 seeds, 30 periods, open loop 90 vs feedback 90')
     args = parser.parse_args(argv)
     if args.quick:
@@ -361,15 +413,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     wall = time.perf_counter()
-    trials = run_p6(conditions, range(args.seeds), args.periods, min(args.jobs, 2))
+    trials = run_p6(conditions, range(args.seeds), args.periods, min(args.jobs, 2), contacts=args.contacts)
     rows = summarize(trials, args.periods)
     with (out / 'p6_trials.csv').open('w', newline='') as handle:
         writer = csv.writer(handle)
         writer.writerow(['condition', 'seed', 'r0_bl', 'theta0_deg', 'phi0_deg', 'lifetime_periods', 'censored',
-                         'halts', 'final_r_bl', 'travel_w', 'trouble'])
+                         'halts', 'final_r_bl', 'travel_w', 'contact_periods', 'contact_periods_second_half',
+                         'trouble'])
         for t in trials:
             writer.writerow([t.condition.label, t.seed, f'{t.start[0]:.4f}', f'{t.start[1]:.2f}', f'{t.start[2]:.2f}',
                              t.lifetime_periods, t.censored, len(t.halts), f'{t.r[-1]:.3f}', f'{t.travel_w:.3f}',
+                             len(t.contact_periods) if args.contacts else '',
+                             sum(q >= args.periods / 2 for q in t.contact_periods) if args.contacts else '',
                              t.trouble])
     with (out / 'p6_summary.csv').open('w', newline='') as handle:
         summary_writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
@@ -380,6 +435,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     plot_survival(trials, out / 'p6_survival.png', args.periods)
     plot_transport(trials, out / 'p6_transport.png')
     sys.stdout.write(format_summary(rows, args.periods) + '\n')
+    if args.contacts:
+        sys.stdout.write(format_contacts(trials, args.periods) + '\n')
     for a in (c for c in conditions if c.feedback):
         for b in (c for c in conditions if not c.feedback and c.alpha_max_deg == a.alpha_max_deg):
             stat, p = logrank_test([t for t in trials if t.condition == b], [t for t in trials if t.condition == a])
