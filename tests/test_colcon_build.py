@@ -103,3 +103,13 @@ def test_built_gait_executable_runs_from_the_install_space_and_publishes(install
     assert str(install_space) in subprocess.run(
         [sys.executable, '-c', 'import smarticle_driver; print(smarticle_driver.__file__)'],
         env=env, capture_output=True, text=True, check=True).stdout
+
+
+@pytest.mark.slow
+@pytest.mark.integration
+def test_the_bringup_launch_files_and_parameter_file_are_installed_for_ros2_launch(install_space: Path) -> None:
+    share = install_space / 'smarticle_bringup' / 'share' / 'smarticle_bringup'
+    shipped = sorted(p.name for p in (ROOT / 'smarticle_bringup' / 'launch').glob('*.launch.xml'))
+    assert shipped and sorted(p.name for p in (share / 'launch').glob('*.launch.xml')) == shipped
+    assert (share / 'config' / 'stack.yaml').read_text() == \
+        (ROOT / 'smarticle_bringup' / 'config' / 'stack.yaml').read_text()

@@ -228,6 +228,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.robots < 1 or args.periods <= 0:
         print('demo: --robots must be >= 1 and --periods > 0', file=sys.stderr)
         return 2
+    args.out = args.out.resolve()   # launch files resolve relative paths against their own folder
     args.out.mkdir(parents=True, exist_ok=True)
     times, poses, rtf, trouble = run_stack(args, args.out / 'logs')
     if trouble:
@@ -244,8 +245,8 @@ def main(argv: list[str] | None = None) -> int:
     print(f'\n[demo] {args.robots} robots, {args.scene} start, alpha_max {args.alpha_max:g} deg, '
           f'{times[-1] / GAIT_PERIOD:.0f} periods received over DDS, {rtf:.1f}x real time')
     print(f'[demo] gliders (pairs bound >= {args.min_periods} periods; bound = centre distance under '
-          f'{config.r_bind / config.body_length:.1f} BL in every period, judged from poses alone, as a tracker '
-          'would: neighbours that rest close together count too, see dist [W]):')
+          f'{config.r_bind / config.body_length:.1f} BL in some frame of each period, from poses alone (the one '
+          'rule of docs/gliders.md); isolated = no third robot within 2 W in >= 90 % of its periods):')
     print(report.table)
     moved = np.linalg.norm(poses[-1, :, :2] - poses[0, :, :2], axis=1) / config.width
     print('[demo] net displacement of each robot (W): ' + ', '.join(f'{k}: {d:.2f}' for k, d in enumerate(moved)))

@@ -17,9 +17,14 @@ from .errors import SpecError
 
 #: Gait period T of the paper's square gait (s).
 GAIT_PERIOD = 1.6
-#: Servo top speed: 0.1 s per 60 degrees (a common hobby-servo rating), which lets a 120 degree
-#: amplitude (240 degree stroke) finish within a 0.4 s quarter (rad/s).
-SERVO_SPEED = math.radians(60.0) / 0.1
+#: Servo top speed of the paper's robot: pi rad per 0.4 s quarter, the speed-controlled motors of the
+#: authors' Chrono model (rad/s). At alpha_max = 90 deg the arm sweeps its 180 degree stroke in the whole
+#: quarter, as the paper's gait does; amplitudes up to 90 deg fit a 1.6 s period. With it the converged
+#: drift is reached at 1/480 s (7 % off); the earlier hobby-servo rating (0.1 s per 60 deg, 10.5 rad/s)
+#: stops the arm 0.1 s early and its drift is 17 % off its limit at 1/480 s (docs/sim_calibration.md, P7).
+SERVO_SPEED = math.pi / 0.4
+#: The larger feedback robot's servo (not given in the paper): 0.1 s per 60 degrees, a hobby-servo rating.
+FEEDBACK_SERVO_SPEED = math.radians(60.0) / 0.1
 #: Side of each robot's ArUco tag, its outer black square (m); robot k carries tag k.
 TAG_SIZE = 0.018
 #: ArUco dictionary of the robots' tags.
@@ -105,7 +110,7 @@ SMALL = RobotSpec(name='small', body_width=0.054, body_depth=0.022, body_height=
 #: ``FEEDBACK_ASSUMED`` (docs/feedback.md, "The feedback robot as built", has the sensitivity table):
 #: the heights (body 4.0 cm, arms 3.4 cm with 3 mm clearance: the small robot's proportions, arms ~85 % of
 #: the body height); the arm mass (20 g each, servo horn + arm + FSRs, body 135 g with two servos and
-#: the board); the servo speed (the small robot's 0.1 s / 60 deg, so the 1.6 s gait is the same); the
+#: the board); the servo speed (``FEEDBACK_SERVO_SPEED``, a hobby-servo rating of 0.1 s / 60 deg); the
 #: servo torque 0.3 N m, scaled from the small robot's 0.05 N m so that the largest arm-tip force per
 #: robot weight is the same (tau / (l m g): 0.05 / (0.050 x 0.0348 x 9.81) = 2.9; 2.9 x 0.060 x 0.175 x
 #: 9.81 = 0.30 N m); the small robot's 0.05 N m was lowered because stronger servos drive jams that tip
@@ -115,7 +120,7 @@ SMALL = RobotSpec(name='small', body_width=0.054, body_depth=0.022, body_height=
 #: against a 60 x 34 mm face, so a real sensor misses touches off its pad.
 FEEDBACK = RobotSpec(name='feedback', body_width=0.065, body_depth=0.035, body_height=0.040,
                      arm_length=0.060, arm_thickness=0.007, arm_height=0.034, arm_clearance=0.003,
-                     total_mass=0.175, arm_mass=0.020, servo_torque=0.3)
+                     total_mass=0.175, arm_mass=0.020, servo_speed=FEEDBACK_SERVO_SPEED, servo_torque=0.3)
 
 #: The feedback robot's values that the paper does not give (field: value), see ``FEEDBACK``.
 FEEDBACK_ASSUMED: dict[str, float] = {'body_height': FEEDBACK.body_height, 'arm_height': FEEDBACK.arm_height,

@@ -358,6 +358,8 @@ VARIANTS: dict[str, dict[str, Any]] = {
     'authors + arm-arm friction 1.5': {**MODELS['authors'], 'friction_arm_arm': 1.5},
 }
 VARIANTS['proposed'] = MODELS['proposed']
+for _inv in (480, 960, 1920):   # the shipped defaults against the time step
+    VARIANTS[f'shipped dt 1/{_inv}'] = {'time_step': 1.0 / _inv}
 VARIANTS['proposed soft'] = MODELS['proposed soft']
 for _it in (5, 10, 20, 50):     # solver iterations at the candidate step, robots kept flat
     VARIANTS[f'flat dt 1/480 it {_it}'] = {**MODELS['candidate'], 'tilt_inertia_scale': 100.0,

@@ -144,9 +144,9 @@ def section_p1(ctx: Context) -> list[str]:
     ax.set_title(f'P1: {positive}/{n} trials with a pair bound >= {limit} periods', fontsize=9)
     ctx.save(fig, 'p1_longest')
     return [f'Positive trial: a glider (glider analysis, K = {ctx.spec.base.get("min_periods")} periods, '
-            f'r_bind {ctx.spec.base.get("r_bind_bl")} BL or contact) bound for >= {limit} periods. '
-            f'Isolated: no third robot\'s centre within {iso_w:g} W of either robot in every frame of the bound '
-            'periods.', '', '![P1](p1_longest.png)']
+            f'bound = r under {ctx.spec.base.get("r_bind_bl")} BL in any frame of a period) bound for >= {limit} '
+            f'periods. Isolated: in >= 90 % of its periods no third robot\'s centre within {iso_w:g} W of either '
+            'robot.', '', '![P1](p1_longest.png)']
 
 
 def section_trajectories(ctx: Context) -> list[str]:

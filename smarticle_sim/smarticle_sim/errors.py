@@ -16,12 +16,20 @@ class SceneError(SimError, ValueError):
 
 
 class SimTrouble(SimError, RuntimeError):
-    """The simulation went wrong (NaN, flip, fall, penetration, runaway speed) and was stopped."""
+    """The simulation went wrong (NaN, flip, fall, penetration, runaway speed) and was stopped.
 
-    def __init__(self, robot: int, time: float, quantity: str, value: float, limit: str) -> None:
+    ``physical`` marks an end that is physics, not numerics (a robot pushed or gliding off the plate):
+    the advice is then a larger plate, not a smaller step.
+    """
+
+    def __init__(self, robot: int, time: float, quantity: str, value: float, limit: str,
+                 physical: bool = False) -> None:
         self.robot = robot
         self.time = time
         self.quantity = quantity
         self.value = value
+        self.physical = physical
+        advice = ('a physical end, not numerical trouble: a larger plate_size keeps it on the plate' if physical
+                  else 'lower the time step, raise solver iterations or check the scene')
         super().__init__(f'sim trouble: robot {robot} at t = {time:.4f} s: {quantity} = {value:.6g} '
-                         f'({limit}); lower the time step, raise solver iterations or check the scene')
+                         f'({limit}); {advice}')

@@ -28,7 +28,7 @@ def check_state(time: float, positions: np.ndarray, tilt: np.ndarray, speed: np.
     if (off > half).any():
         k = int(np.argmax(off))
         raise SimTrouble(k, time, 'distance of the body centre from the plate axes (m)', float(off[k]),
-                         f'the plate ends at {half} m: the body left the plate')
+                         f'the plate ends at {half} m: the body left the plate', physical=True)
     z = positions[:, 2]
     low, high = -body_height, 2.0 * body_height
     outside = (z < low) | (z > high)

@@ -14,8 +14,9 @@ import pytest
 @pytest.mark.slow
 def test_demo_runs_the_stack_and_writes_its_outputs(tmp_path: Path) -> None:
     out = tmp_path / 'demo'
+    # a relative output folder, as ./demo.sh uses (out/demo): the launch files must not resolve it themselves
     proc = subprocess.run([sys.executable, '-m', 'smarticle_bringup.demo', '--robots', '3', '--periods', '4',
-                           '--out', str(out)], capture_output=True, text=True, timeout=300)
+                           '--out', 'demo'], capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     assert 'gliders (pairs bound' in proc.stdout and 'net displacement' in proc.stdout
     data = np.load(out / 'poses.npz')

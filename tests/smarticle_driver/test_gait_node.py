@@ -22,7 +22,7 @@ def test_gait_node_follows_start_and_halt(nodes, ros_node) -> None:  # type: ign
     from std_msgs.msg import Header
 
     nodes.start('gait', '--ros-args', '-p', 'robot_id:=2', '-p', 'alpha_max_deg:=60.0',
-                '-p', 'period:=0.8', '-p', 'heartbeat:=0.05')
+                '-p', 'period:=0.8', '-p', 'servo_speed:=10.5', '-p', 'heartbeat:=0.05')
     node = ros_node('gait_probe')
     got: list[tuple[float, tuple[float, ...]]] = []
     node.create_subscription(JointState, topics.topic('joint_commands', 2),
@@ -41,7 +41,7 @@ def test_gait_node_follows_start_and_halt(nodes, ros_node) -> None:  # type: ign
     start_pub.publish(msg)
     spin_until(node, lambda: time.time() > t0 + 1.7, 5.0)
     # every command carries the gait's targets at its stamp (the gait node's clock)
-    reference = SquareGait(GaitConfig.from_degrees(60.0, period=0.8))
+    reference = SquareGait(GaitConfig.from_degrees(60.0, period=0.8, servo_speed=10.5))
     reference.start(t0)
     started = [(t, pos) for t, pos in got if t >= t0]
     mismatched = [(t - t0, pos) for t, pos in started
@@ -68,6 +68,7 @@ def test_gait_node_clock_rate_offset_runs_its_gait_clock_fast(nodes, ros_node) -
     from std_msgs.msg import Header
 
     nodes.start('gait', '--ros-args', '-p', 'robot_id:=1', '-p', 'alpha_max_deg:=60.0', '-p', 'period:=0.8',
+                '-p', 'servo_speed:=10.5',
                 '-p', 'heartbeat:=0.05', '-p', 'clock_rate_offset:=0.05')
     node = ros_node('gait_clock_probe')
     got: list[tuple[float, tuple[float, ...]]] = []
@@ -82,13 +83,13 @@ def test_gait_node_clock_rate_offset_runs_its_gait_clock_fast(nodes, ros_node) -
     msg.stamp.sec, msg.stamp.nanosec = int(t0), int((t0 % 1) * 1e9)
     start_pub.publish(msg)
     spin_until(node, lambda: time.time() > t0 + 2.5, 6.0)
-    reference = SquareGait(GaitConfig.from_degrees(60.0, period=0.8))
+    reference = SquareGait(GaitConfig.from_degrees(60.0, period=0.8, servo_speed=10.5))
     reference.start(t0)
     started = [(t, pos) for t, pos in got if t >= t0]
     assert len(started) > 30
     assert all(pos == pytest.approx(reference.command(board_time(t, t0, 1.05)).targets, abs=1e-9)
                for t, pos in started)
-    plain = SquareGait(GaitConfig.from_degrees(60.0, period=0.8))
+    plain = SquareGait(GaitConfig.from_degrees(60.0, period=0.8, servo_speed=10.5))
     plain.start(t0)
     assert any(pos != pytest.approx(plain.command(t).targets, abs=1e-9) for t, pos in started)
 
@@ -125,7 +126,7 @@ def test_alpha_max_changes_at_run_time_and_bad_changes_are_refused(nodes, ros_no
     from tests.helpers.params import get_parameter, set_parameter
 
     proc = nodes.start('gait', '--ros-args', '-r', '__ns:=/smarticle_4', '-p', 'alpha_max_deg:=60.0',
-                '-p', 'period:=0.8', '-p', 'heartbeat:=0.05', '-p', 'autostart:=true')
+                '-p', 'period:=0.8', '-p', 'servo_speed:=10.5', '-p', 'heartbeat:=0.05', '-p', 'autostart:=true')
     node = ros_node('gait_params_probe')
     got: list[tuple[float, ...]] = []
     node.create_subscription(JointState, topics.topic('joint_commands', 4), lambda m: got.append(tuple(m.position)),

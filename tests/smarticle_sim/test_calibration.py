@@ -33,7 +33,7 @@ def test_a_parallel_quadrant_2_start_is_kicked_out_of_reach(config: SimConfig, g
     assert r[2 * per] > 1.7, r[2 * per]                        # 1.3 -> 1.8 BL in the first period
     assert r[-1] > 1.7                                         # and it stays out there (friction stops it)
     speed = np.linalg.norm(np.diff(rec.poses[:, :, :2], axis=0), axis=2) / config.physics.control_tick
-    assert speed[: 2 * per].max() > 0.1                        # a kick (m/s), not a push that ends at rest
+    assert speed[: 2 * per].max() > 0.05                       # a kick (m/s): the pair coasts apart after it
 
 
 def test_a_lone_robot_drifts_as_the_converged_model_says(config: SimConfig, gait90: GaitConfig) -> None:

@@ -218,11 +218,14 @@ def test_trouble_on_lasting_penetration_not_on_a_spike(config: SimConfig, monkey
 def test_trouble_check_names_robot_time_quantity(config: SimConfig) -> None:
     positions = np.zeros((3, 3))
     positions[2, 0] = 0.5
-    with pytest.raises(SimTrouble, match=r'robot 2 at t = 1\.5000 s: distance .* left the plate'):
+    with pytest.raises(SimTrouble, match=r'robot 2 at t = 1\.5000 s: distance .* left the plate.*physical end'
+                       ) as left:
         check_state(1.5, positions, np.zeros(3), np.zeros(3), np.zeros((3, 2)), config.physics, 0.027)
-    with pytest.raises(SimTrouble, match='robot 0 .* tilt'):
+    assert left.value.physical
+    with pytest.raises(SimTrouble, match='robot 0 .* tilt.*lower the time step') as tipped:
         check_state(0.0, np.zeros((3, 3)), np.array([1.0, 0, 0]), np.zeros(3), np.zeros((3, 2)),
                     config.physics, 0.027)
+    assert not tipped.value.physical
     with pytest.raises(SimTrouble, match='robot 1 .* speed'):
         check_state(0.0, np.zeros((3, 3)), np.zeros(3), np.array([0, 9.0, 0]), np.zeros((3, 2)),
                     config.physics, 0.027)

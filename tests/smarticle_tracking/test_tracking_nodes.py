@@ -160,7 +160,8 @@ def test_sim_camera_tracker_and_monitor_find_the_glider(nodes, ros_node, tmp_pat
     # Lock-step runs faster than real time and the image topic keeps the last 2 frames, so the tracker must
     # keep up with the sim: 640x480 at 5 frames per sim second leaves it room on a loaded 2-core machine.
     width, height = 640, 480
-    calibration = save_calibration(tmp_path / 'cal.yaml', sim_calibration(width, height))
+    # 0.3 m across the 480 px side: tags span 29 px (at 0.6 m, 14 px tags are missed in some poses)
+    calibration = save_calibration(tmp_path / 'cal.yaml', sim_calibration(width, height, view=0.3))
     node = ros_node('pipeline_probe')
     truth: dict[int, np.ndarray] = {}
     tracked: dict[int, np.ndarray] = {}
@@ -179,6 +180,7 @@ def test_sim_camera_tracker_and_monitor_find_the_glider(nodes, ros_node, tmp_pat
         nodes.start('gait', '--ros-args', '-p', f'robot_id:={k}', '-p', 'lockstep:=true', '-p', 'use_sim_time:=true')
     bridge = nodes.start('sim_bridge', '--ros-args', '-p', 'scene:=pair', '-p', 'duration:=6.0',
                          '-p', 'camera_rate:=5.0', '-p', f'camera_width:={width}', '-p', f'camera_height:={height}',
+                         '-p', 'camera_view:=0.3',
                          '-p', 'wait_for_subscribers:=1', '-p', 'wait_for_camera_subscribers:=1',
                          '-r', '/smarticles/poses:=/ground_truth/poses')
     assert spin_until(node, lambda: bridge.poll() is not None and len(reports) >= 5, 60.0), nodes.output(bridge)
