@@ -1,7 +1,7 @@
 """Halt latency of the hardware path: FSR sample -> feedback -> gait -> servo bridge -> Set Target bytes.
 
 Board emulator in this process; servo_bridge, gait and feedback as separate processes over DDS on
-localhost. Every other gait period the emulator's arm1_front input is pressed (2 N, 30 ms) early in
+localhost. Every other gait period the emulator's arm1_front input is pressed (15 N, 30 ms) early in
 quarter 0, while arm 1 strokes. Per halt it measures, from the stamp of the triggering FSR sample (the
 halt message carries it):
   hold_cmd     the gait's hold command (its joint_commands stamp: when the gait node acted on the halt)
@@ -115,7 +115,7 @@ def measure(halts: int, workdir: Path, bridge_source: Path | None = None) -> tup
                 n = 2 + 2 * i
                 spin_to(probe, rig.period_start(n) + 0.03)
                 before = len(rig.observed.halts)
-                rig.pulse('arm1_front', 2.0)
+                rig.pulse('arm1_front', 15.0)     # inside the shipped arm1_front window [10.21, 19.91] N
                 spin_to(probe, rig.period_start(n + 1) - 0.05)
                 if len(rig.observed.halts) <= before:
                     continue
