@@ -270,9 +270,41 @@ def windows_yaml(w: SignatureWindows) -> str:
                    f'    {f.face}_enabled: {"true" if f.enabled else "false"}\n' for f in w.faces)
 
 
-def main_events(path: str, floor: float) -> int:
+def check_windows(events: Sequence[CollisionEvent], windows: Sequence[tuple[str, float, float, bool]],
+                  floor: float = DEFAULT_FLOOR) -> SignatureWindows:
+    """What given windows (face, f_min, f_max, enabled) catch among recorded events (e.g. the shipped ones)."""
+    faces = []
+    for i, (face, f_min, f_max, enabled) in enumerate(windows):
+        comp = np.array([ev.peaks[k, i] for ev in events if ev.kind == 'compression' for k in range(2)])
+        brace = np.array([ev.peaks[k, i] for ev in events if ev.kind == 'bracing' for k in range(2)])
+        comp, brace = comp[comp > floor], brace[brace > floor]
+        faces.append(FaceWindow(face, f_min, f_max, enabled, int(comp.size),
+                                int(((comp >= f_min) & (comp <= f_max)).sum()), int(brace.size),
+                                int(((brace >= f_min) & (brace <= f_max)).sum())))
+    comp_ev = [ev for ev in events if ev.kind == 'compression']
+    brace_ev = [ev for ev in events if ev.kind == 'bracing']
+    return SignatureWindows(tuple(faces), len(comp_ev), _caught(comp_ev, faces), len(brace_ev),
+                            _caught(brace_ev, faces))
+
+
+def shipped_windows() -> list[tuple[str, float, float, bool]]:
+    """The windows of the shipped parameters (config/feedback.yaml)."""
+    from .parameters import DEFAULT_WINDOWS
+
+    return [(face, *DEFAULT_WINDOWS[face]) for face in FSR_FACES]
+
+
+def main_events(path: str, floor: float, check_shipped: bool = False) -> int:
     """Calibrate from a per-step collision record; exit code 3 when the windows must not be shipped."""
     events = find_events(load_record(path))
+    if check_shipped:
+        checked = check_windows(events, shipped_windows(), floor)
+        sys.stdout.write('shipped windows on this record:\n' + format_windows(checked) + '\n')
+        if checked.problems:
+            sys.stderr.write('smarticle-feedback-calibrate: the shipped windows fail here: '
+                             + '; '.join(checked.problems) + '\n')
+            return 3
+        return 0
     w = windows_from_events(events, floor)
     sys.stdout.write(format_windows(w) + '\n')
     if w.problems:
@@ -292,10 +324,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument('--low', type=float, default=80.0, help='percentile of f_min (default 80)')
     parser.add_argument('--high', type=float, default=100.0, help='percentile of f_max (default 100 = the largest)')
     parser.add_argument('--c2-only', action='store_true', help='pair runs: only samples with phi near 0')
+    parser.add_argument('--check-shipped', action='store_true',
+                        help='per-step records: count what the shipped windows catch instead of proposing new ones')
     args = parser.parse_args(argv)
     if _is_collision_record(args.recording):
         try:
-            return main_events(args.recording, args.floor)
+            return main_events(args.recording, args.floor, args.check_shipped)
         except (CalibrationInputError, OSError, KeyError, ValueError) as err:
             sys.stderr.write(f'smarticle-feedback-calibrate: {err}\n')
             return 2

@@ -71,3 +71,14 @@ def test_a_record_that_is_not_one_is_refused(tmp_path: Path) -> None:
         load_record(tmp_path / 'other.npz')
     with pytest.raises(CalibrationInputError, match='links'):
         CollisionRecord(np.zeros(3), np.zeros((3, 2, 4)), np.zeros((3, 2, 2), dtype=bool), np.zeros(3), 1.6, (0, 0))
+
+
+def test_the_shipped_windows_can_be_checked_on_a_record(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    kicks = [(0.1 + 0.4 * i, 2, 8.0, 0.02) for i in range(3)] + [(0.3 + 0.4 * i, 2, 3.0, -0.02) for i in range(3)]
+    path = synthetic_record(kicks).save(tmp_path / 'c2_steps.npz')
+    assert impact_window.main([str(path), '--check-shipped']) == 0      # arm2_front ships [4.97, 13.27] N
+    assert 'compression 3 of 3, bracing 0 of 3' in capsys.readouterr().out
+    checked = impact_window.check_windows(find_events(load_record(path)), [
+        ('arm1_front', 0.0, 0.0, False), ('arm1_back', 0.0, 0.0, False), ('arm2_front', 1.0, 2.0, True),
+        ('arm2_back', 0.0, 0.0, False)])
+    assert checked.compression_caught == 0 and checked.problems
