@@ -16,7 +16,8 @@ contact events (``collisions.find_events``), and for each face proposes the wind
 the peaks of the compression events (dr > 0) from those of the bracing ones (dr < 0): ``f_min`` the
 compression peak that maximises (compression caught / compression) - (bracing caught / bracing) on that
 face, ``f_max`` the largest compression peak times ``HEADROOM``; a face is enabled when its window
-catches more compression than bracing events. A window set that catches no compression event, or that
+catches a fraction of the compression peaks at least ``SEPARATION`` above that of the bracing peaks
+(several records are pooled). A window set that catches no compression event, or that
 catches most bracing events, is reported with the counts and refused (exit code 3).
 """
 
@@ -176,6 +177,9 @@ def plot_window(s: WindowSuggestion, path: str | Path, title: str = '') -> Path:
 
 #: f_max of a face = its largest compression peak times this (room for a harder hit than recorded).
 HEADROOM = 1.25
+#: A face is enabled when its window catches this much larger a fraction of the compression peaks than of
+#: the bracing peaks (a face whose kicks are as hard either way cannot tell them apart).
+SEPARATION = 0.3
 
 
 @dataclass(frozen=True)
@@ -235,7 +239,8 @@ def face_window(face: str, comp: np.ndarray, brace: np.ndarray) -> FaceWindow:
             best, f_min = score, float(lo)
     c = int(((comp >= f_min) & (comp <= f_max)).sum())
     b = int(((brace >= f_min) & (brace <= f_max)).sum())
-    return FaceWindow(face, f_min, f_max, c > b, int(comp.size), c, int(brace.size), b)
+    separation = c / comp.size - (b / brace.size if brace.size else 0.0)
+    return FaceWindow(face, f_min, f_max, c > 0 and separation >= SEPARATION, int(comp.size), c, int(brace.size), b)
 
 
 def windows_from_events(events: Sequence[CollisionEvent], floor: float = DEFAULT_FLOOR) -> SignatureWindows:
@@ -294,9 +299,9 @@ def shipped_windows() -> list[tuple[str, float, float, bool]]:
     return [(face, *DEFAULT_WINDOWS[face]) for face in FSR_FACES]
 
 
-def main_events(path: str, floor: float, check_shipped: bool = False) -> int:
-    """Calibrate from a per-step collision record; exit code 3 when the windows must not be shipped."""
-    events = find_events(load_record(path))
+def main_events(paths: Sequence[str], floor: float, check_shipped: bool = False) -> int:
+    """Calibrate from per-step collision records (events pooled); exit code 3 when the windows must not be shipped."""
+    events = [ev for path in paths for ev in find_events(load_record(path))]
     if check_shipped:
         checked = check_windows(events, shipped_windows(), floor)
         sys.stdout.write('shipped windows on this record:\n' + format_windows(checked) + '\n')
@@ -317,7 +322,8 @@ def main_events(path: str, floor: float, check_shipped: bool = False) -> int:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of `smarticle-feedback-calibrate`: table on stdout, PNG next to the input (or --png)."""
     parser = argparse.ArgumentParser(prog='smarticle-feedback-calibrate', description=__doc__.split('\n')[0])
-    parser.add_argument('recording', help='c2_steps.npz of `smarticle-c2-collisions` (per-face windows from the '
+    parser.add_argument('recording', nargs='+',
+                        help='c2_steps.npz of `smarticle-c2-collisions` (several are pooled; per-face windows from the '
                         'compression signature), or an npz of `smarticle-sim run ... --fsr` (percentile window)')
     parser.add_argument('--png', help='figure path (default: <recording>_window.png)')
     parser.add_argument('--floor', type=float, default=DEFAULT_FLOOR, help='ignore forces below this (N)')
@@ -327,12 +333,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument('--check-shipped', action='store_true',
                         help='per-step records: count what the shipped windows catch instead of proposing new ones')
     args = parser.parse_args(argv)
-    if _is_collision_record(args.recording):
+    if all(_is_collision_record(path) for path in args.recording):
         try:
             return main_events(args.recording, args.floor, args.check_shipped)
         except (CalibrationInputError, OSError, KeyError, ValueError) as err:
             sys.stderr.write(f'smarticle-feedback-calibrate: {err}\n')
             return 2
+    if len(args.recording) > 1:
+        sys.stderr.write('smarticle-feedback-calibrate: several recordings are pooled only for per-step collision '
+                         'records (smarticle-c2-collisions)\n')
+        return 2
+    args.recording = args.recording[0]
     try:
         suggestion = calibrate_recording(args.recording, args.floor, args.low, args.high, args.c2_only)
     except (CalibrationInputError, OSError, KeyError, ValueError) as err:

@@ -21,14 +21,15 @@ from .errors import FeedbackConfigError
 NODE_NAME = 'feedback'
 
 #: Default impact windows (f_min N, f_max N, enabled) per face, from `smarticle-feedback-calibrate` on the
-#: compression signature of a simulated C2 pair (`smarticle-c2-collisions --periods 40`, seed 0; the
-#: windows catch 30 of 33 compression events and 3 of 14 bracing ones; docs/feedback.md). arm1_back saw no
-#: collision at all and stays disabled.
+#: compression signature of simulated C2 pairs (`smarticle-c2-collisions --periods 40`, seeds 0-4 pooled:
+#: the windows catch 113 of 176 compression events and 16 of 119 bracing ones; docs/feedback.md).
+#: arm2_back cannot tell compression from bracing (55 of 55 against 51 of 52) and arm1_back saw no
+#: collision: both disabled.
 DEFAULT_WINDOWS: dict[str, tuple[float, float, bool]] = {
-    'arm1_front': (10.21, 19.91, True),
+    'arm1_front': (11.93, 21.08, True),
     'arm1_back': (0.0, 0.0, False),
-    'arm2_front': (4.97, 13.27, True),
-    'arm2_back': (2.77, 13.69, True),
+    'arm2_front': (5.25, 13.63, True),
+    'arm2_back': (0.79, 13.69, False),
 }
 
 
