@@ -9,7 +9,6 @@ Command line: ``smarticle-c2-collisions --periods 40 --out out/feedback/c2`` (ta
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -19,29 +18,19 @@ from smarticle_common.gait import GaitConfig
 from smarticle_feedback.collisions import (CollisionRecord, find_events, format_events, format_signature,
                                            plot_events, signature, write_events_csv)
 
-from .p6 import C2_START, START_ATTEMPTS, c2_start
+from .p6 import C2_START, c2_scene
 
 
 def record_pair(seed: int = 0, periods: float = 40.0, alpha_max_deg: float = 90.0, preset: str = 'feedback',
                 base: tuple[float, float, float, tuple[float, float]] = C2_START) -> CollisionRecord:
     """Run the seed's C2 start open loop for ``periods`` and record every physics step."""
     from smarticle_common.pairs import pair_coordinates
-    from smarticle_sim.errors import SceneError
     from smarticle_sim.runner import Runner
-    from smarticle_sim.scenes import pair_scene
     from smarticle_sim.settings import SimConfig
 
     config = SimConfig.from_preset(preset)
     gait = GaitConfig.from_degrees(alpha_max_deg, servo_speed=config.robot.servo_speed)
-    for attempt in range(START_ATTEMPTS):
-        r, theta, phi = c2_start(seed, base, attempt=attempt)
-        try:
-            scene = pair_scene(config.robot, gait, r, math.radians(theta), math.radians(phi), phases=base[3])
-            break
-        except SceneError:
-            continue
-    else:
-        raise SceneError(f'seed {seed}: no admissible C2 start near {base[:3]}')
+    scene, _ = c2_scene(config, gait, seed, base)
     times: list[float] = []
     fsr: list[np.ndarray] = []
     links: list[np.ndarray] = []

@@ -22,7 +22,7 @@ from collections.abc import Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from smarticle_common.facts import GAIT_PERIOD, R_BIND_BL
@@ -112,6 +112,25 @@ def c2_start(seed: int, base: tuple[float, float, float, tuple[float, float]] = 
     return (r + jitter[0] * u[0], theta + jitter[1] * u[1], phi + jitter[2] * u[2])
 
 
+
+def c2_scene(config: Any, gait: GaitConfig, seed: int,
+             base: tuple[float, float, float, tuple[float, float]] = C2_START,
+             ) -> tuple[Any, tuple[float, float, float]]:
+    """The pair scene of the seed's C2 start (the first admissible of ``START_ATTEMPTS`` seeded draws) and
+    that start (r BL, theta deg, phi deg)."""
+    from smarticle_sim.errors import SceneError
+    from smarticle_sim.scenes import pair_scene
+
+    for attempt in range(START_ATTEMPTS):
+        r, theta, phi = c2_start(seed, base, attempt=attempt)
+        try:
+            scene = pair_scene(config.robot, gait, r, math.radians(theta), math.radians(phi), phases=base[3])
+        except SceneError:
+            continue
+        return scene, (r, theta, phi)
+    raise SceneError(f'seed {seed}: no admissible C2 start near {base[:3]} at '
+                     f'{math.degrees(gait.alpha_max):g} deg in {START_ATTEMPTS} draws')
+
 def pair_lifetime(times: np.ndarray, poses: np.ndarray, period: float, body_length: float,
                   r_bind_bl: float = R_BIND_BL, t0: float = 0.0) -> tuple[int, bool]:
     """Bound periods from the start (glider analysis, K = 1) and whether the run lasted to the end."""
@@ -138,10 +157,8 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
     (``PairTrial.contact_periods``; a step hook, the trajectory is the same).
     """
     from smarticle_sim.batch import run_trial
-    from smarticle_sim.errors import SceneError
     from smarticle_sim.physics import Physics
     from smarticle_sim.runner import Controller, FeedbackController, GaitController
-    from smarticle_sim.scenes import pair_scene
     from smarticle_sim.settings import SimConfig
     from smarticle_common.pairs import pair_coordinates
 
@@ -150,16 +167,7 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
     if robot_changes:
         config = replace(config, robot=replace(config.robot, **dict(robot_changes)))  # type: ignore[arg-type]
     gait = GaitConfig.from_degrees(condition.alpha_max_deg, servo_speed=config.robot.servo_speed)
-    for attempt in range(START_ATTEMPTS):
-        r, theta, phi = c2_start(seed, base, attempt=attempt)
-        try:
-            scene = pair_scene(config.robot, gait, r, math.radians(theta), math.radians(phi), phases=base[3])
-            break
-        except SceneError:
-            continue
-    else:
-        raise SceneError(f'seed {seed}: no admissible C2 start near {base[:3]} at {condition.alpha_max_deg:g} deg '
-                         f'in {START_ATTEMPTS} draws')
+    scene, (r, theta, phi) = c2_scene(config, gait, seed, base)
     feedback_controllers: list[FeedbackController] = []
 
     counter = ContactPeriods(gait.period, start_time) if count_contacts else None
