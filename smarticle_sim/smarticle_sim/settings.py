@@ -250,7 +250,7 @@ class SimConfig:
     def __post_init__(self) -> None:
         """Refuse settings that cannot converge for this robot; warn about ones that converge poorly."""
         ph, spec = self.physics, self.robot
-        tip_travel = spec.servo_speed * (spec.arm_length) * ph.time_step     # arm tip per step at top speed
+        tip_travel = spec.servo_speed * spec.arm_length * ph.time_step     # arm tip per step at top speed
         if tip_travel >= spec.arm_thickness:
             raise ConfigError(f'PhysicsConfig.time_step: {ph.time_step:.6g} s lets an arm tip travel '
                               f'{1e3 * tip_travel:.2f} mm per step, more than the arm is thick '

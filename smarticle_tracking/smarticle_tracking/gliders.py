@@ -327,18 +327,19 @@ def _fit_beta(result: MsdResult, config: GliderConfig) -> float:
         return math.nan
 
 
-def isolation_fraction(times: FloatArray, poses: FloatArray, i: int, j: int, start: int, stop: int,
-                       t0: float, config: GliderConfig) -> float:
+def isolation_fraction(frame_periods: IntArray, poses: FloatArray, i: int, j: int, start: int, stop: int,
+                       config: GliderConfig) -> float:
     """Fraction of periods ``[start, stop)`` in which no third robot comes within the isolation distance.
 
-    A third robot is near in a period if, in any frame of it where both are seen, its centre lies within
-    ``config.isolation_distance`` of robot i's or robot j's centre. 1.0 when there is no third robot.
+    ``frame_periods`` is each frame's period index (``period_index``). A third robot is near in a period
+    if, in any frame of it where both are seen, its centre lies within ``config.isolation_distance`` of
+    robot i's or robot j's centre. 1.0 when there is no third robot.
     """
     n = poses.shape[1]
     others = np.array([k for k in range(n) if k not in (i, j)], dtype=np.intp)
     if others.size == 0 or stop <= start:
         return 1.0
-    q = period_index(times, t0, config.period)
+    q = frame_periods
     in_run = (q >= start) & (q < stop)
     xy = poses[in_run][:, :, :2]
     with np.errstate(invalid='ignore'):
@@ -351,11 +352,12 @@ def isolation_fraction(times: FloatArray, poses: FloatArray, i: int, j: int, sta
 
 
 def measure_run(table: PeriodTable, pairs: IntArray, pair: int, start: int, stop: int,
-                config: GliderConfig, times: FloatArray | None = None, poses: FloatArray | None = None,
-                t0: float = 0.0) -> Glider:
+                config: GliderConfig, frame_periods: IntArray | None = None,
+                poses: FloatArray | None = None) -> Glider:
     """Measure one run of bound periods ``[start, stop)`` of pair index ``pair``.
 
-    ``times`` and ``poses`` (all robots) give the isolation; without them the glider counts as isolated.
+    ``frame_periods`` (each frame's period index) and ``poses`` (all robots) give the isolation; without
+    them the glider counts as isolated.
     """
     means = stretch_means(table.sums[start:stop, pair].sum(axis=0))
     path = table.strobe[start:stop, pair].copy()
@@ -365,8 +367,8 @@ def measure_run(table: PeriodTable, pairs: IntArray, pair: int, start: int, stop
                  subtract_mean=config.msd_subtract_mean)
     phi_mean = float(means.phi)
     i, j = int(pairs[pair, 0]), int(pairs[pair, 1])
-    isolation = 1.0 if times is None or poses is None else \
-        isolation_fraction(times, poses, i, j, start, stop, t0, config)
+    isolation = 1.0 if frame_periods is None or poses is None else \
+        isolation_fraction(frame_periods, poses, i, j, start, stop, config)
     return Glider(
         i=i, j=j, pair_index=int(pair),
         start_period=int(start), lifetime_periods=int(stop - start),
@@ -399,8 +401,9 @@ def analyse_gliders(times: ArrayLike, poses: ArrayLike, config: GliderConfig | N
     runs = bound_runs(table.bound)
     chosen = np.flatnonzero((runs.stop - runs.start) >= cfg.min_periods)
     chosen = chosen[np.lexsort((runs.pair[chosen], runs.start[chosen]))]   # by start, then pair
+    frame_periods = period_index(t, start, cfg.period)       # once for every glider's isolation
     gliders = tuple(measure_run(table, pairs, int(runs.pair[k]), int(runs.start[k]), int(runs.stop[k]), cfg,
-                                t, arr, start)
+                                frame_periods, arr)
                     for k in chosen)
     return GliderAnalysis(cfg, start, t, arr, coords, table, gliders)
 
