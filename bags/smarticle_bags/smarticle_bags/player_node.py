@@ -3,7 +3,8 @@
 Topics whose message type is not installed are skipped with a warning. ``/clock`` is published from
 bag time when ``clock`` > 0 (the bag's own ``/clock`` is then not replayed). Pause and resume:
 publish ``std_msgs/msg/Bool`` on ``/player/pause`` (true = pause, false = resume), or press the
-space bar when the player runs in a terminal. The node exits when playback ends (unless ``loop``).
+space bar when the player runs in a terminal. The node exits when playback ends (unless ``loop``), once reliable subscribers have acknowledged
+the last messages (or after ``ACK_WAIT`` seconds).
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from typing import Any
 
 import rclpy
 from rosgraph_msgs.msg import Clock
+from rclpy.duration import Duration
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -30,6 +32,8 @@ from .reader import BagReader, RawMessage
 from .parameters import PLAYER_NODE, PLAYER_PARAMS, player_config
 
 TICK = 0.001
+#: Seconds the player waits, at the end, for reliable subscribers to acknowledge what it sent.
+ACK_WAIT = 5.0
 
 
 class Keyboard:
@@ -182,7 +186,19 @@ class PlayerNode(Node):
         """Spin until the bag has been played (or ROS shuts down); return the exit code."""
         while rclpy.ok() and not self.finished:
             executor.spin_once(timeout_sec=0.1)
+        self.wait_for_acks()
         return 0
+
+    def wait_for_acks(self) -> None:
+        """Before exiting, let reliable subscribers acknowledge the last messages (at most ACK_WAIT s).
+
+        A process that exits right after its last publish takes unacknowledged samples with it.
+        """
+        deadline = time.monotonic() + ACK_WAIT
+        for name, publisher in self.publishers_by_topic.items():
+            left = max(0.0, deadline - time.monotonic())
+            if not publisher.wait_for_all_acked(Duration(seconds=left)):
+                self.get_logger().warning(f'{name}: not every subscriber acknowledged the last messages')
 
     def destroy_node(self) -> None:
         """Restore the terminal, then destroy the node."""
