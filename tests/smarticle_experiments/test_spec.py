@@ -19,7 +19,7 @@ def test_every_shipped_spec_loads_and_expands() -> None:
     assert {'p1', 'p2', 'p3', 'p4', 'p5', 'p6', 'p7', 'accuracy'} <= set(names)
     counts = {name: len(load_spec(name).trials(CODE)) for name in names}
     assert counts['p1'] == 151
-    assert counts['p4'] == 2 * 12 * 12
+    assert counts['p4'] == 2 * 24 * 24
     assert counts['p6'] == (4 + 1) * 40          # two grid blocks: open loop 70/80/85/90, feedback 90
 
 
