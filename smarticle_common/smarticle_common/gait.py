@@ -33,6 +33,12 @@ MOVING_ARM: tuple[int, int, int, int] = (0, 1, 0, 1)
 #: Corner signs (alpha1, alpha2) in traversal order.
 CORNER_SIGNS: tuple[tuple[int, int], ...] = ((1, 1), (-1, 1), (-1, -1), (1, -1))
 
+#: Clock tolerance (s) of every caller of ``SquareGait.command``: a tick whose time lands on a quarter
+#: boundary up to floating-point rounding belongs to the new quarter, so callers ask for ``t + TIME_EPS``.
+#: The batch runner and the gait node use the same value, so the simulation's batch and ROS paths switch
+#: quarters at the same tick.
+TIME_EPS = 1e-9
+
 ALPHA_MAX_RANGE_DEG = (5.0, 120.0)
 
 

@@ -116,6 +116,10 @@ TOPICS: tuple[TopicSpec, ...] = (
               '', 's (stamp)', 'feedback controller',
               'hold the arms now; the gait resumes from there at the next period; '
               'stamp = time of the triggering sample'),
+    TopicSpec('decision', _R + '/feedback_decision', 'std_msgs/msg/Header', Qos.COMMAND,
+              '', 's (stamp)', 'feedback controller (lock-step only)',
+              'the decision on one FSR sample: stamp = the sample\'s stamp, frame_id = the face that halted '
+              'the arms, empty for no halt; in lock-step the gait answers /clock only once it has it'),
     TopicSpec('pose', _R + '/pose', 'geometry_msgs/msg/PoseStamped', Qos.SENSOR,
               ARENA_FRAME, 'm, quaternion', 'tracker or sim bridge',
               'planar pose of this robot: body centre, yaw = heading of the body normal'),

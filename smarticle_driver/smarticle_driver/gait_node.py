@@ -15,7 +15,7 @@ from rclpy.time import Time
 
 from smarticle_common import topics
 from smarticle_common.facts import GAIT_PERIOD, SERVO_SPEED
-from smarticle_common.gait import GaitCommand, GaitConfig, SquareGait, board_time
+from smarticle_common.gait import GaitCommand, GaitConfig, SquareGait, TIME_EPS, board_time
 from smarticle_common.node import accept_runtime_changes, read_config, resolve_robot_id, run_node
 from smarticle_common.params import ROBOT_ID_PARAM, ParameterError, ParamSpec
 
@@ -41,6 +41,10 @@ PARAMS: tuple[ParamSpec, ...] = (
               -0.05, 0.05),
     ParamSpec('lockstep', False, 'publish one command stamped with every /clock message (for the '
               "simulation's lock-step mode) instead of on change plus heartbeat"),
+    ParamSpec('wait_for_feedback', False, 'lock-step only: answer each /clock message only once the feedback '
+              'node has decided on the FSR sample of that time (/smarticle_<k>/feedback_decision), and take '
+              'halts from those decisions, so a halt is part of the tick of its sample and a run is the same '
+              'bit for bit; for robots that run a feedback node with lockstep:=true'),
 )
 
 
@@ -75,10 +79,22 @@ class GaitNode(Node):
         header_type = topics.message_class('std_msgs/msg/Header')
         start = topics.spec_of('start')
         self.create_subscription(header_type, start.resolve(), self.on_start, topics.qos_profile(start.qos))
-        halt = topics.spec_of('halt')
-        self.create_subscription(header_type, halt.resolve(self.robot_id), self.on_halt,
-                                 topics.qos_profile(halt.qos))
         self.lockstep: bool = values['lockstep']
+        self.wait_for_feedback: bool = self.lockstep and values['wait_for_feedback']
+        if values['wait_for_feedback'] and not self.lockstep:
+            self.get_logger().warning('wait_for_feedback needs lockstep:=true: ignored')
+        #: Lock-step with feedback: the /clock time still to answer, and the decisions received (stamp ns ->
+        #: halting face or '') for times not answered yet.
+        self._unanswered_ns: int | None = None
+        self._decisions: dict[int, str] = {}
+        halt = topics.spec_of('halt')
+        if self.wait_for_feedback:   # halts come with the decisions, at the time of their sample
+            decision = topics.spec_of('decision')
+            self.create_subscription(header_type, decision.resolve(self.robot_id), self.on_decision,
+                                     topics.qos_profile(decision.qos))
+        else:
+            self.create_subscription(header_type, halt.resolve(self.robot_id), self.on_halt,
+                                     topics.qos_profile(halt.qos))
         if self.lockstep:
             clock = topics.spec_of('clock')
             self.create_subscription(topics.message_class(clock.type), clock.resolve(), self.on_clock,
@@ -134,7 +150,12 @@ class GaitNode(Node):
             self.on_tick()
 
     def on_clock(self, msg: Any) -> None:
-        """Lock-step mode: publish the command for exactly the time of this clock message."""
+        """Lock-step mode: publish the command for exactly the time of this clock message.
+
+        With ``wait_for_feedback`` the command waits for the feedback node's decision on the FSR sample of
+        the same time (``on_decision``); a repeated clock message (the bridge resends it while it waits)
+        is answered again.
+        """
         now = Time.from_msg(msg.clock)
         if now.nanoseconds < self._latest_ns:
             self.get_logger().warning('clock went backwards: ignored')
@@ -142,7 +163,35 @@ class GaitNode(Node):
         self._latest_ns = now.nanoseconds
         if self.autostart and self.gait.start_time is None:
             self.gait.start(now.nanoseconds * 1e-9)
-        self.publisher.publish(self.to_message(self.gait.command(self.gait_clock(now.nanoseconds * 1e-9)), now))
+        if self.wait_for_feedback:
+            self._unanswered_ns = now.nanoseconds
+            self.answer_clock()
+            return
+        self.publish_command(now)
+
+    def on_decision(self, msg: Any) -> None:
+        """Lock-step with feedback: keep the decision on the sample of ``msg.header.stamp``; answer if due."""
+        stamp = Time.from_msg(msg.stamp).nanoseconds
+        if stamp < self._latest_ns:
+            return   # a repeat of a decision on a time already answered
+        self._decisions[stamp] = msg.frame_id
+        self.answer_clock()
+
+    def answer_clock(self) -> None:
+        """Publish the command of the unanswered /clock time once its decision is here (halting first)."""
+        stamp = self._unanswered_ns
+        if stamp is None or stamp not in self._decisions:
+            return
+        if self._decisions[stamp] and self.gait.halt(self.gait_clock(stamp * 1e-9)):
+            self.get_logger().info(f'halt at t = {stamp * 1e-9:.4f} s ({self._decisions[stamp]})')
+        for old in [s for s in self._decisions if s < stamp]:
+            del self._decisions[old]
+        self.publish_command(Time(nanoseconds=stamp))
+
+    def publish_command(self, now: Time) -> None:
+        """Lock-step: publish the gait's command for exactly ``now``."""
+        t = self.gait_clock(now.nanoseconds * 1e-9)
+        self.publisher.publish(self.to_message(self.gait.command(t + TIME_EPS), now))
 
     def on_tick(self) -> None:
         """Evaluate the gait and publish when the targets change or the heartbeat is due."""
@@ -151,7 +200,7 @@ class GaitNode(Node):
             return  # sim time not yet received
         if self.autostart and self.gait.start_time is None:
             self.gait.start(now.nanoseconds * 1e-9)
-        command = self.gait.command(self.gait_clock(now.nanoseconds * 1e-9))
+        command = self.gait.command(self.gait_clock(now.nanoseconds * 1e-9) + TIME_EPS)
         if command.targets != self._last_targets or now.nanoseconds - self._last_sent_ns >= self.heartbeat:
             self.publisher.publish(self.to_message(command, now))
             self._last_targets = command.targets

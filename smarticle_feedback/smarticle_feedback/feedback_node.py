@@ -2,8 +2,9 @@
 
 Subscribes ``/smarticle_<k>/fsr`` (sensor_msgs/JointState, effort = newtons) and ``/smarticles/start``;
 publishes ``/smarticle_<k>/halt`` (std_msgs/Header, stamp = the stamp of the triggering FSR sample,
-frame_id = the triggering face) and ``/diagnostics``. The node never asks where it runs: the servo
-bridge and the sim bridge publish the same FSR topic. See docs/feedback.md.
+frame_id = the triggering face) and ``/diagnostics``; with ``lockstep`` (the simulation's lock-step mode)
+also ``/smarticle_<k>/feedback_decision`` for every sample, which the lock-step gait node waits for.
+The node never asks where it runs: the servo bridge and the sim bridge publish the same FSR topic. See docs/feedback.md.
 """
 
 from __future__ import annotations
@@ -46,6 +47,12 @@ class FeedbackNode(Node):
         qos = {key: topics.qos_profile(topics.spec_of(key).qos) for key in ('fsr', 'halt', 'start')}
         self.halt_pub = self.create_publisher(self.Header, topics.topic('halt', self.robot_id), qos['halt'])
         self.diagnostics = DiagnosticsPublisher(self, f'smarticle_{self.robot_id}/{NODE_NAME}')
+        self.lockstep: bool = values['lockstep']
+        self.decision_pub: Any = None
+        self._last_decision: Any = None
+        if self.lockstep:
+            self.decision_pub = self.create_publisher(self.Header, topics.topic('decision', self.robot_id),
+                                                      topics.qos_profile(topics.spec_of('decision').qos))
         self.create_subscription(_msg('fsr'), topics.topic('fsr', self.robot_id), self.on_fsr, qos['fsr'])
         self.create_subscription(self.Header, topics.topic('start'), self.on_start, qos['start'])
         self.create_timer(values['diagnostics_period'], self.publish_diagnostics, clock=rclpy.clock.Clock())
@@ -71,21 +78,37 @@ class FeedbackNode(Node):
         self.controller.start(stamp if stamp > 0.0 else self.get_clock().now().nanoseconds * 1e-9)
 
     def on_fsr(self, msg: Any) -> None:
-        """Check the sample, update the controller, publish a halt stamped with the sample's stamp."""
+        """Check the sample, update the controller, publish a halt stamped with the sample's stamp.
+
+        In lock-step the decision on every sample is published too (a bad sample decides "no halt"), and a
+        sample with the stamp of the one decided last (the bridge resends while it waits) is not taken
+        again: its decision is resent.
+        """
+        last = self._last_decision
+        if self.lockstep and last is not None and Time.from_msg(msg.header.stamp) <= Time.from_msg(last.stamp):
+            self.decision_pub.publish(last)
+            return
+        decided_face = ''   # the decision topic's frame_id: the halting face, '' for no halt
         try:
             sample = check_sample(list(msg.name), list(msg.effort))
             for warning in sample.warnings:
                 self.report('bad_values', warning)
             decision = self.controller.update(Time.from_msg(msg.header.stamp).nanoseconds * 1e-9,
                                               sample.forces)
+            if decision.halt:
+                halt = self.Header()
+                halt.stamp = msg.header.stamp
+                halt.frame_id = decision.face or ''
+                self.halt_pub.publish(halt)
+                decided_face = decision.face or 'halt'
         except FsrSampleError as err:
             self.report(err.kind, str(err))
-            return
-        if decision.halt:
-            halt = self.Header()
-            halt.stamp = msg.header.stamp
-            halt.frame_id = decision.face or ''
-            self.halt_pub.publish(halt)
+        if self.decision_pub is not None:
+            decided = self.Header()
+            decided.stamp = msg.header.stamp
+            decided.frame_id = decided_face
+            self._last_decision = decided
+            self.decision_pub.publish(decided)
 
     def report(self, kind: str, problem: str) -> None:
         """Count a bad message and log it (throttled)."""

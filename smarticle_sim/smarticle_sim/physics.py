@@ -205,12 +205,6 @@ class Physics:
             raise SimError(f'robot {k}: speed limit must be > 0 rad/s, got {speed!r}')
         self.send(k, (t1, t2), spd)
 
-    def hold_arms(self, robot: int) -> None:
-        """Command both arms of ``robot`` to stay where they are now."""
-        k = self.check_robot(robot)
-        js = self._client.getJointStates(self.body_ids[k], ARM_JOINTS)
-        self.send(k, (js[0][0], js[1][0]), self.config.robot.servo_speed)
-
     def send(self, k: int, targets: tuple[float, float], speed: float) -> None:
         """Send servo commands of robot ``k`` (unchecked: for controllers), only for joints that changed."""
         speed = min(speed, self.config.robot.servo_speed)

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
-from smarticle_common.gait import GaitConfig, SquareGait, board_time
+from smarticle_common.gait import GaitConfig, SquareGait, TIME_EPS, board_time
 
 from .errors import ConfigError
 from .noise import ServoDelays, clock_rates
@@ -31,8 +31,8 @@ from .physics import Physics
 from .scenes import Scene
 from .settings import SimConfig
 
-#: A gait quarter boundary this close (s) after a tick's time is taken at that tick.
-_TIME_EPS = 1e-9
+#: A gait quarter boundary this close (s) after a tick's time is taken at that tick (the gait node's too).
+_TIME_EPS = TIME_EPS
 
 
 class Controller(Protocol):
@@ -213,15 +213,22 @@ class GaitController:
                 self._pending_at[k] = math.inf
 
     def halt(self, robot: int) -> bool:
-        """Halt ``robot``'s gait now (arms hold; resume at its next period); False if not running."""
+        """Halt ``robot``'s gait now (arms hold; resume at its next period); False if not running.
+
+        The arms hold at the gait's own hold command (its reference angles at the halt, from which it
+        resumes), sent at once: the command the gait node sends a board or the sim bridge after a halt,
+        so the batch and ROS paths hold at the same angles.
+        """
         k = self.physics.check_robot(robot)
         gait = self._gaits[k]
         now = self.physics.time
-        if gait is None or not gait.halt(self.local_time(k, now)):
+        local = self.local_time(k, now)
+        if gait is None or not gait.halt(local):
             return False
         self._pending[k] = None   # a command still waiting for its servo frame never goes out
         self._pending_at[k] = math.inf
-        self.physics.hold_arms(k)
+        hold = gait.command(local + _TIME_EPS)
+        self.physics.send(k, hold.targets, hold.speed)
         self._next_update[k] = now
         self._next_due = min(self._next_due, now)
         return True

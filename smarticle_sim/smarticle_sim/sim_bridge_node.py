@@ -65,6 +65,8 @@ class SimBridgeNode(Node):
                                                  qos['joint_states'], event_callbacks=quiet) for k in range(n)]
         self.fsr_pubs = [self.create_publisher(self.JointState, topics.topic('fsr', k), qos['fsr'],
                                                event_callbacks=quiet) for k in range(n)]
+        #: The FSR messages published at the current time, by robot (resent while the lock-step waits).
+        self.fsr_sent: dict[int, Any] = {}
         self.pose_pubs = [self.create_publisher(self.PoseStamped, topics.topic('pose', k), qos['pose'],
                                                 event_callbacks=quiet) for k in range(n)]
         for k in range(n):
@@ -135,13 +137,9 @@ class SimBridgeNode(Node):
             pub.publish(msg)
         listened = [k for k, pub in enumerate(self.fsr_pubs) if pub.get_subscription_count() > 0]
         forces = self.core.fsr_sample(listened)   # peaks since the last publication; [] stops the tracking
-        if listened:
-            for row, k in enumerate(listened):
-                msg = self.JointState()
-                msg.header.stamp = now
-                msg.name = list(topics.FSR_FACES)
-                msg.effort = [float(v) for v in forces[row]]
-                self.fsr_pubs[k].publish(msg)
+        self.fsr_sent = {}
+        for row, k in enumerate(listened):
+            self.publish_fsr(k, now, forces[row])
         array = self.PoseArray()
         array.header.stamp = now
         array.header.frame_id = topics.ARENA_FRAME
@@ -158,6 +156,33 @@ class SimBridgeNode(Node):
                 self.publish_frame(now)
             else:
                 self.core.skip_frame()   # nobody watches: no rendering at all
+
+    def publish_fsr(self, robot: int, now: Any, forces: Any) -> None:
+        """Publish one FSR sample of ``robot`` stamped ``now`` (kept for a resend at the same time)."""
+        msg = self.JointState()
+        msg.header.stamp = now
+        msg.name = list(topics.FSR_FACES)
+        msg.effort = [float(v) for v in forces]
+        self.fsr_sent[robot] = msg
+        self.fsr_pubs[robot].publish(msg)
+
+    def resend_fsr(self) -> None:
+        """Lock-step, while waiting: publish the current time's FSR samples again (best effort may lose one).
+
+        A robot whose FSR topic found its first subscriber since the publication gets a sample now: the
+        force at this instant, which is also the whole sample at the start of a run (no step before it).
+        """
+        listened = [k for k, pub in enumerate(self.fsr_pubs) if pub.get_subscription_count() > 0]
+        new = [k for k in listened if k not in self.fsr_sent]
+        for k in listened:
+            if k in self.fsr_sent:
+                self.fsr_pubs[k].publish(self.fsr_sent[k])
+        if new:
+            now = Time(nanoseconds=self.core.time_ns).to_msg()
+            forces = self.core.fsr_sample(listened)   # no step since the sample: each face's force now
+            for row, k in enumerate(listened):
+                if k in new:
+                    self.publish_fsr(k, now, forces[row])
 
     def publish_frame(self, now: Any) -> None:
         """Render the overhead frame and publish it (mono8) with its camera_info."""
@@ -261,6 +286,7 @@ class SimBridgeNode(Node):
                 clock = self.Clock()
                 clock.clock = Time(nanoseconds=self.core.time_ns).to_msg()
                 self.clock_pub.publish(clock)
+                self.resend_fsr()   # and a feedback node the sample its gait node waits on
                 last = now
                 if now - started > 5.0:
                     self.get_logger().warning(f'lock-step: waiting for joint commands of robots {missing} '

@@ -5,8 +5,10 @@ tick as the batch loop reads it) + one gait node (lockstep, use_sim_time) and on
 (use_sim_time) per robot, separate processes over DDS. Batch path: ``run_pair_trial`` (Runner + gait
 cores + controller calling GaitController.halt, halt applied before the next tick). For each seed it prints halts,
 the lifetime and r at the end, and writes CSV under out/benchmarks/.
-The halt is asynchronous to the lock-step barrier (see docs/feedback.md): it lands on the tick of its
-FSR sample if it reaches the gait node before the bridge's barrier closes, else a tick or two later.
+The gait nodes wait for their feedback node's decision on each tick's FSR sample (``wait_for_feedback``,
+feedback ``lockstep``), so a halt lands on the tick of its sample and the two paths give the same run
+(tests/smarticle_feedback/test_feedback_lockstep.py checks it bit for bit); this script shows the
+figures side by side over more seeds and periods.
 Usage: python tests/benchmarks/bench_feedback_rossim.py [--seeds 3] [--periods 10]
 """
 
@@ -26,12 +28,14 @@ from smarticle_common import topics
 from smarticle_common.launching import DomainReservation, ProcessGroup, isolated_ros_env
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))   # the repository root: tests.* helpers
+from smarticle_sim.settings import SimConfig
 from smarticle_experiments.p6 import C2_START, Condition, c2_start, pair_lifetime, run_pair_trial
 from tests.benchmarks._common import markdown_table, out_path, write_csv
 
 START_AT = 0.5
 TICK = 1.0 / 60.0
 BL = 0.065
+SERVO_SPEED = SimConfig.from_preset('feedback').robot.servo_speed
 
 
 def ros_trial(seed: int, periods: float, workdir: Path, probe: object) -> dict[str, float]:
@@ -59,10 +63,11 @@ def ros_trial(seed: int, periods: float, workdir: Path, probe: object) -> dict[s
     with ProcessGroup(workdir, dict(os.environ)) as procs:
         for k in range(2):
             procs.start('gait', '--ros-args', '-r', f'__node:=gait_{k}', '-p', f'robot_id:={k}', '-p', 'lockstep:=true',
-                        '-p', 'use_sim_time:=true', '-p', 'alpha_max_deg:=90.0', '-p', f'phase:={phases[k]}',
+                        '-p', 'wait_for_feedback:=true', '-p', 'alpha_max_deg:=90.0',
+                        '-p', f'servo_speed:={SERVO_SPEED}', '-p', f'phase:={phases[k]}',
                         '-p', f'start_at:={START_AT}')
             procs.start('feedback', '--ros-args', '-r', f'__node:=feedback_{k}', '-p', f'robot_id:={k}',
-                        '-p', 'use_sim_time:=true', '-p', f'phase:={phases[k]}', '-p', f'start_at:={START_AT}')
+                        '-p', 'lockstep:=true', '-p', f'phase:={phases[k]}', '-p', f'start_at:={START_AT}')
         bridge = procs.start('sim_bridge', '--ros-args', '-p', 'preset:=feedback', '-p', 'scene:=pair',
                              '-p', f'pair_r:={r}', '-p', f'pair_theta_deg:={theta}', '-p', f'pair_phi_deg:={phi}',
                              '-p', f'pair_phase_0:={phases[0]}', '-p', f'pair_phase_1:={phases[1]}',

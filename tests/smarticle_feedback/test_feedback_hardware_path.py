@@ -13,6 +13,8 @@ from tests.helpers.fake_board import running_emulator
 from tests.helpers.hardware_rig import HardwareRig
 
 PERIOD = 0.8
+#: A C2 start whose batch run halts robot 0 in several periods (1-4 of 5) at the shipped windows.
+SEED = 2
 
 
 def test_an_fsr_impact_holds_the_emulated_servos_until_the_next_period(nodes: Any, ros_node: Any,
@@ -97,7 +99,7 @@ def test_a_recorded_c2_force_trace_halts_the_hardware_path_at_the_batch_periods(
     from tests.helpers.hardware_rig import FSR_CHANNEL, volts_for
 
     period, periods = 1.6, 5
-    batch = run_pair_trial(Condition(90.0, True), 0, periods, record_samples=True)
+    batch = run_pair_trial(Condition(90.0, True), SEED, periods, record_samples=True)
     expected = sorted({math.floor(t / period) for t, robot, _ in batch.halts if robot == 0})
     assert len(expected) >= 2, batch.halts
     tick = batch.samples[1][0] - batch.samples[0][0]

@@ -3,8 +3,8 @@
 Topics whose message type is not installed are skipped with a warning. ``/clock`` is published from
 bag time when ``clock`` > 0 (the bag's own ``/clock`` is then not replayed). Pause and resume:
 publish ``std_msgs/msg/Bool`` on ``/player/pause`` (true = pause, false = resume), or press the
-space bar when the player runs in a terminal. The node exits when playback ends (unless ``loop``), once reliable subscribers have acknowledged
-the last messages (or after ``ACK_WAIT`` seconds).
+space bar when the player runs in a terminal. The node exits when playback ends (unless ``loop``),
+once reliable subscribers have acknowledged the last messages (or after ``ACK_WAIT`` seconds).
 """
 
 from __future__ import annotations

@@ -1,0 +1,124 @@
+"""The lock-step ROS path with feedback is deterministic and equals the batch path, bit for bit.
+
+sim_bridge (lock-step, an FSR sample every control tick), one gait node (lockstep, wait_for_feedback) and
+one feedback node (lockstep) per robot, each a separate process over DDS, on a C2 start of the P6
+experiment: a halt is part of the tick of its FSR sample, so two runs give the same poses at every
+stamp, and those are the poses of the batch path (Runner + FeedbackController + GaitController).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+import pytest
+from smarticle_common import topics
+from smarticle_common.gait import GaitConfig
+from smarticle_experiments.p6 import C2_START, c2_scene, default_feedback_config
+from smarticle_feedback.controller import ImpactController
+from smarticle_sim.bridge import BridgeSettings
+from smarticle_sim.runner import FeedbackController, Runner
+from smarticle_sim.settings import SimConfig
+
+from tests.helpers.ros import spin_until
+
+pytestmark = pytest.mark.integration
+
+START_AT = 0.5
+SEED = 0
+PERIODS = 1.5
+
+
+def _start() -> tuple[SimConfig, dict[str, Any]]:
+    """The feedback robot's config and the sim bridge parameters of seed SEED's C2 start."""
+    config = SimConfig.from_preset('feedback')
+    gait = GaitConfig.from_degrees(90.0, servo_speed=config.robot.servo_speed)
+    _, (r, theta, phi) = c2_scene(config, gait, SEED)
+    phases = C2_START[3]
+    return config, {'preset': 'feedback', 'scene': 'pair', 'pair_r': r, 'pair_theta_deg': theta,
+                    'pair_phi_deg': phi, 'pair_phase_0': phases[0], 'pair_phase_1': phases[1],
+                    'alpha_max_deg': 90.0, 'publish_period': config.physics.control_tick,
+                    'start_at': START_AT}
+
+
+def _batch(config: SimConfig, params: dict[str, Any], ticks: int) -> tuple[dict[int, np.ndarray], list[tuple]]:
+    """Poses by stamp (ns) and halts (stamp ns, robot, face) of the batch path over ``ticks`` ticks."""
+    settings = BridgeSettings.defaults(**params)
+    runner = Runner.with_gaits(settings.sim, settings.scene())
+    assert runner.gaits is not None
+    runner.gaits.start(START_AT)
+    feedback = default_feedback_config()
+    policies = {k: ImpactController(replace(feedback, period=settings.gait.period, phase=p))
+                for k, p in enumerate(C2_START[3])}
+    for policy in policies.values():
+        policy.start(START_AT)
+    controller = FeedbackController(runner.gaits, policies)
+    runner.controllers.insert(0, controller)
+    poses: dict[int, np.ndarray] = {}
+    try:
+        for _ in range(ticks + 1):
+            poses[round(runner.time * 1e9)] = runner.physics.poses()[:, :2].copy()
+            runner.run(1)
+    finally:
+        runner.close()
+    return poses, [(round(t * 1e9), k, face) for t, k, face in controller.halts]
+
+
+def _ros(nodes: Any, probe: Any, params: dict[str, Any], config: SimConfig, duration: float,
+         listeners: int) -> tuple[dict[int, np.ndarray], list[tuple]]:
+    """Poses by stamp (ns) and halts (stamp ns, robot, face) of the lock-step ROS path."""
+    from geometry_msgs.msg import PoseArray
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from std_msgs.msg import Header
+
+    poses: dict[int, np.ndarray] = {}
+    halts: list[tuple] = []
+    subs = [probe.create_subscription(
+        PoseArray, topics.topic('poses'),
+        lambda m: poses.__setitem__(m.header.stamp.sec * 10**9 + m.header.stamp.nanosec,
+                                    np.array([[p.position.x, p.position.y] for p in m.poses])),
+        QoSProfile(depth=5000, reliability=ReliabilityPolicy.BEST_EFFORT))]
+    for k in range(2):
+        subs.append(probe.create_subscription(
+            Header, topics.topic('halt', k),
+            lambda m, k=k: halts.append((m.stamp.sec * 10**9 + m.stamp.nanosec, k, m.frame_id)),
+            topics.qos_profile(topics.Qos.COMMAND)))
+    phases = C2_START[3]
+    for k in range(2):
+        nodes.start('gait', '--ros-args', '-r', f'__node:=gait_{k}', '-p', f'robot_id:={k}',
+                    '-p', 'lockstep:=true', '-p', 'wait_for_feedback:=true', '-p', 'alpha_max_deg:=90.0',
+                    '-p', f'servo_speed:={config.robot.servo_speed}', '-p', f'phase:={phases[k]}',
+                    '-p', f'start_at:={START_AT}')
+        nodes.start('feedback', '--ros-args', '-r', f'__node:=feedback_{k}', '-p', f'robot_id:={k}',
+                    '-p', 'lockstep:=true', '-p', f'phase:={phases[k]}', '-p', f'start_at:={START_AT}')
+    # the halts are seen only once both feedback nodes' publishers have matched the probe
+    assert spin_until(probe, lambda: all(sub.get_publisher_count() > 0 for sub in subs[1:]), 30.0)
+    args = [a for name, value in {**params, 'duration': duration, 'wait_for_subscribers': listeners}.items()
+            for a in ('-p', f'{name}:={value}')]
+    bridge = nodes.start('sim_bridge', '--ros-args', *args)
+    spin_until(probe, lambda: bridge.poll() is not None, 120.0)
+    spin_until(probe, lambda: False, 0.3)
+    assert bridge.returncode == 0, nodes.output(bridge)
+    nodes.stop_all()
+    for sub in subs:
+        probe.destroy_subscription(sub)
+    return poses, sorted(halts)
+
+
+def test_lockstep_feedback_is_deterministic_and_equals_the_batch_path(nodes: Any, ros_node: Any) -> None:
+    config, params = _start()
+    duration = START_AT + PERIODS * 1.6
+    ticks = round(duration / config.physics.control_tick)
+    batch, batch_halts = _batch(config, params, ticks)
+    assert batch_halts, 'the C2 start must produce a halt in the batch path (else the test shows nothing)'
+    probe = ros_node('feedback_lockstep_probe')
+    runs = [_ros(nodes, probe, params, config, duration, listeners=1) for _ in range(2)]
+    for poses, halts in runs:
+        assert halts == batch_halts
+        common = sorted(set(poses) & set(batch))
+        assert len(common) >= 0.8 * ticks, f'only {len(common)} of {ticks} pose messages arrived'
+        for stamp in common:
+            assert np.array_equal(poses[stamp], batch[stamp]), \
+                f'differs from the batch path at t = {stamp * 1e-9:.4f} s by ' \
+                f'{np.abs(poses[stamp] - batch[stamp]).max():.3g} m'
