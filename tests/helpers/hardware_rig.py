@@ -73,8 +73,10 @@ class HardwareRig:
         self.observed.commands.append((stamp, time.time(), tuple(msg.position)))
 
     def ready(self) -> bool:
-        """True when every process is connected: gait and feedback listen for the start, commands reach the board."""
+        """True when every process is connected: gait and feedback listen for the start, the gait and the probe for
+        halts, commands reach the board."""
         return (self.probe.count_publishers(topics.topic('halt', 0)) >= 1
+                and self.probe.count_subscribers(topics.topic('halt', 0)) >= 2
                 and self.probe.count_subscribers(topics.topic('start')) >= 2
                 and len(self.observed.commands) > 0 and len(self.emulator.targets()) > 0)
 

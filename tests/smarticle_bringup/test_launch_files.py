@@ -62,11 +62,13 @@ def test_sim_separate_starts_every_robot_and_composed_one_host() -> None:
                            '/smarticle_1/feedback', '/smarticle_2/gait', '/smarticle_2/feedback', '/recorder']
     assert [n.on_exit_shutdown for n in plan.nodes].count(True) == 1 and plan.nodes[0].on_exit_shutdown
     assert params_of(plan.nodes[0])['robots'] == '3'
-    assert params_of(plan.nodes[2]) == {'lockstep': 'true', 'use_sim_time': 'true'}
+    assert params_of(plan.nodes[2]) == {'lockstep': 'true', 'wait_for_feedback': 'true', 'use_sim_time': 'true'}
+    assert params_of(plan.nodes[3]) == {'lockstep': 'true', 'use_sim_time': 'true'}     # the feedback node
     assert params_of(plan.nodes[-1])['output'] == ''
     assert "output:=''" in plan.nodes[-1].ros_arguments()          # an empty value is the empty string
     open_loop = resolve(LAUNCH / 'sim.launch.xml', {'robots': '2', 'composed': 'false', 'feedback': 'false'})
     assert names(open_loop) == ['/sim_bridge', '/glider_monitor', '/smarticle_0/gait', '/smarticle_1/gait']
+    assert params_of(open_loop.nodes[2])['wait_for_feedback'] == 'false'      # no feedback node to wait for
     composed = resolve(LAUNCH / 'sim.launch.xml', {'robots': '5', 'view': 'true'})
     host, view = composed.nodes
     assert host.executable == 'smarticle-compose' and host.on_exit_shutdown and view.executable == 'smarticle-view'

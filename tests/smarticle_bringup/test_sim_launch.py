@@ -34,7 +34,8 @@ def logs(tmp_path: Path, name: str) -> str:
 
 
 def test_composed_and_separate_runs_give_every_robot_the_same_trajectory(ros_node: Any, tmp_path: Path) -> None:
-    """Open loop (feedback:=false) the lock-step path is deterministic: one seed, one trajectory, either way."""
+    """With the feedback nodes (each gait waits for its feedback node's decision on every FSR sample) the
+    lock-step path is deterministic: one seed, one trajectory, composed or as separate processes."""
     from geometry_msgs.msg import PoseArray
     from rclpy.qos import QoSProfile, ReliabilityPolicy
     from smarticle_common.messages import planar_poses
@@ -48,7 +49,7 @@ def test_composed_and_separate_runs_give_every_robot_the_same_trajectory(ros_nod
     runs: dict[str, dict[int, np.ndarray]] = {}
     for composed in ('true', 'false'):
         got.clear()
-        proc = launch(tmp_path, composed, 'robots:=2', 'feedback:=false', f'composed:={composed}',
+        proc = launch(tmp_path, composed, 'robots:=2', 'feedback:=true', f'composed:={composed}',
                       f'duration:={DURATION!r}', 'wait_for_subscribers:=2', 'seed:=3')
         finished = spin_until(node, lambda proc=proc: proc.poll() is not None, 90.0)
         out = proc.communicate(timeout=30)[0] if finished else ''
