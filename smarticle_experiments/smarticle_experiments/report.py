@@ -46,6 +46,19 @@ class Comparison:
     note: str = ''
 
 
+def seed_ranges(seeds: Sequence[int]) -> str:
+    """Sorted seeds compactly: ``1000, 1001, 1003..1021, 1023`` (a run of three or more as ``a..b``; '-' if none)."""
+    if not seeds:
+        return '-'
+    runs: list[list[int]] = [[seeds[0], seeds[0]]]
+    for seed in seeds[1:]:
+        if seed == runs[-1][1] + 1:
+            runs[-1][1] = seed
+        else:
+            runs.append([seed, seed])
+    return ', '.join(f'{a}..{b}' if b - a >= 2 else ', '.join(map(str, range(a, b + 1))) for a, b in runs)
+
+
 @dataclass
 class Context:
     """What a report section sees: the spec, its trials, their stored records, the output folder."""
@@ -68,12 +81,7 @@ class Context:
 
     def seeds_text(self, pairs: Sequence[tuple[Trial, Any]]) -> str:
         """The seeds of some trials, compactly."""
-        seeds = sorted({t.seed for t, _ in pairs})
-        if not seeds:
-            return '-'
-        if seeds == list(range(seeds[0], seeds[-1] + 1)) and len(seeds) > 2:
-            return f'{seeds[0]}..{seeds[-1]}'
-        return ', '.join(map(str, seeds))
+        return seed_ranges(sorted({t.seed for t, _ in pairs}))
 
     def save(self, fig: Any, name: str) -> Path:
         """Write a figure as ``<name>.png`` in the report folder."""

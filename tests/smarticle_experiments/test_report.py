@@ -77,3 +77,13 @@ def test_every_section_a_spec_may_name_is_drawn() -> None:
     from smarticle_experiments.spec import REPORT_SECTIONS
 
     assert set(SECTIONS) == set(REPORT_SECTIONS)
+
+
+def test_seeds_are_listed_as_runs() -> None:
+    from smarticle_experiments.report import seed_ranges
+
+    assert seed_ranges([]) == '-'
+    assert seed_ranges([7]) == '7'
+    assert seed_ranges([0, 1]) == '0, 1'
+    assert seed_ranges([1000, 1001, *range(1003, 1022), 1023]) == '1000, 1001, 1003..1021, 1023'
+    assert seed_ranges(list(range(151))) == '0..150'
