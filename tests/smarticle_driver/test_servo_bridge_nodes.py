@@ -346,7 +346,9 @@ def test_the_lifecycle_walks_every_transition(nodes: Any, ros_node: Any, tmp_pat
     from sensor_msgs.msg import JointState
 
     port = tmp_path / 'maestro_later'                 # no board yet: configure must fail
-    proc = nodes.start('servo_bridge', '--ros-args', '-p', f'port:={port}', '-p', 'autostart:=false')
+    # the watchdog (hold after 0.5 s without a command) must not beat the deactivation on a busy machine
+    proc = nodes.start('servo_bridge', '--ros-args', '-p', f'port:={port}', '-p', 'autostart:=false',
+                       '-p', 'watchdog_timeout:=5.0')
     node = ros_node('lifecycle_probe')
     target = '/servo_bridge'
     states = subscribe(node, 'joint_states')
@@ -371,7 +373,10 @@ def test_the_lifecycle_walks_every_transition(nodes: Any, ros_node: Any, tmp_pat
         assert spin_until(node, lambda: len(emulator.targets()) >= 2, 10.0)   # on a busy machine: late
         assert [r.channel for r in emulator.targets()][:2] == [0, 1]
         assert spin_until(node, lambda: len(states) >= 5, 10.0)
-        command(-1.5, 0.5)                            # a slow stroke: the arm is between the ends
+        started = len(emulator.targets())
+        command(-1.5, 0.5)                            # a slow stroke (4 s): the arm is between the ends
+        assert spin_until(node, lambda: len(emulator.targets()) > started, 10.0)   # the stroke has begun
+        spin_until(node, lambda: False, 0.3)
         before = len(emulator.targets())
         assert lifecycle(node, target, Transition.TRANSITION_DEACTIVATE) == (True, 'inactive')
         hold = emulator.targets()[before:]
