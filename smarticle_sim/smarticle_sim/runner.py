@@ -31,9 +31,6 @@ from .physics import Physics
 from .scenes import Scene
 from .settings import SimConfig
 
-#: A gait quarter boundary this close (s) after a tick's time is taken at that tick (the gait node's too).
-_TIME_EPS = TIME_EPS
-
 
 class Controller(Protocol):
     """Anything that acts on the robots once per control tick, before the physics steps."""
@@ -227,7 +224,7 @@ class GaitController:
             return False
         self._pending[k] = None   # a command still waiting for its servo frame never goes out
         self._pending_at[k] = math.inf
-        hold = gait.command(local + _TIME_EPS)
+        hold = gait.command(local + TIME_EPS)
         self.physics.send(k, hold.targets, hold.speed)
         self._next_update[k] = now
         self._next_due = min(self._next_due, now)
@@ -237,16 +234,16 @@ class GaitController:
         """Ask the gait cores whose quarter has ended (or that were started or halted) for new targets."""
         physics = self.physics
         now = physics.time
-        if now + _TIME_EPS < self._next_due:
+        if now + TIME_EPS < self._next_due:
             return
         delays = self._delays
         if delays is not None:
-            for k in np.flatnonzero(self._pending_at <= now + _TIME_EPS):
+            for k in np.flatnonzero(self._pending_at <= now + TIME_EPS):
                 targets, speed = self._pending[k]  # type: ignore[misc]
                 physics.send(int(k), targets, speed)
                 self._pending[k] = None
                 self._pending_at[k] = math.inf
-        due = np.flatnonzero(self._next_update <= now + _TIME_EPS)
+        due = np.flatnonzero(self._next_update <= now + TIME_EPS)
         for k in due:
             gait = self._gaits[k]
             if gait is None:
@@ -254,18 +251,18 @@ class GaitController:
                 continue
             t = max(now, gait.start_time if gait.start_time is not None else now)
             t = self.local_time(int(k), t)
-            command = gait.command(t + _TIME_EPS)
+            command = gait.command(t + TIME_EPS)
             if not command.halted:  # a halted robot keeps holding the angles it had when it stopped
                 if delays is None:
                     physics.send(int(k), command.targets, command.speed)
                 else:
                     at = float(self._next_update[k]) + delays.draw(int(k))   # the quarter boundary + delay
-                    if at <= now + _TIME_EPS:
+                    if at <= now + TIME_EPS:
                         physics.send(int(k), command.targets, command.speed)
                     else:
                         self._pending[k] = (command.targets, command.speed)
                         self._pending_at[k] = at
-            tau = gait.gait_time(t + _TIME_EPS)
+            tau = gait.gait_time(t + TIME_EPS)
             next_tau = (math.floor(4.0 * tau) + 1) / 4.0
             cfg = gait.config
             boundary = gait.start_time + (next_tau - cfg.phase) * cfg.period  # type: ignore[operator]

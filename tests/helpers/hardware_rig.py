@@ -65,6 +65,10 @@ class HardwareRig:
         self.feedback = procs.start('feedback', '--ros-args', *common, *feedback_args)
         self.t0: float | None = None
 
+    def logs(self) -> str:
+        """What the three node processes have printed so far (for assertion messages)."""
+        return ''.join(self.procs.output(p) for p in (self.bridge, self.gait, self.feedback))
+
     def _on_halt(self, msg: Any) -> None:
         self.observed.halts.append((msg.stamp.sec + msg.stamp.nanosec * 1e-9, time.time(), msg.frame_id))
 

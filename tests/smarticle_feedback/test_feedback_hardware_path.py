@@ -22,7 +22,7 @@ def test_an_fsr_impact_holds_the_emulated_servos_until_the_next_period(nodes: An
     with running_emulator(tmp_path / 'maestro') as emulator:
         probe = ros_node('feedback_hw_probe')
         rig = HardwareRig(nodes, emulator, probe, period=PERIOD, alpha_max_deg=45.0)
-        logs = lambda: ''.join(nodes.output(p) for p in (rig.bridge, rig.gait, rig.feedback))  # noqa: E731
+        logs = rig.logs
         assert spin_until(probe, rig.ready, 20.0), logs()
         t0 = rig.start(1.0)
         # during period 2's first quarter arm 1 strokes from +45 to -45 degrees (0.15 s of a 0.2 s quarter)
@@ -109,7 +109,7 @@ def test_a_recorded_c2_force_trace_halts_the_hardware_path_at_the_batch_periods(
     with running_emulator(tmp_path / 'maestro') as emulator:
         probe = ros_node('feedback_trace_probe')
         rig = HardwareRig(nodes, emulator, probe, period=period, alpha_max_deg=90.0)
-        logs = lambda: ''.join(nodes.output(p) for p in (rig.bridge, rig.gait, rig.feedback))  # noqa: E731
+        logs = rig.logs
         assert spin_until(probe, rig.ready, 20.0), logs()
         t0 = rig.start(1.0)
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from smarticle_common import topics
-from smarticle_common.gait import GaitConfig, SquareGait, open_loop_angles
+from smarticle_common.gait import TIME_EPS, GaitConfig, SquareGait, open_loop_angles
 from smarticle_sim.bridge import BridgeSettings, SimBridgeCore
 from smarticle_sim.errors import ConfigError
 
@@ -50,7 +50,7 @@ def drive_with_gait_cores(core: SimBridgeCore, gaits: list[SquareGait], periods:
     out = [core.physics.poses().copy()]
     for _ in range(periods):
         for k, gait in enumerate(gaits):
-            cmd = gait.command(core.time_ns * 1e-9)
+            cmd = gait.command(core.time_ns * 1e-9 + TIME_EPS)   # as the gait node asks
             core.apply_command(k, list(topics.JOINT_NAMES), list(cmd.targets), [cmd.speed] * 2, core.time_ns)
         assert core.waiting_for() == []
         core.advance()
@@ -83,7 +83,7 @@ def test_fsr_samples_hold_the_peak_of_each_publish_period() -> None:
         core.fsr_sample([0, 1])
         for _ in range(2 * 96):                          # two gait periods of control ticks
             for k, gait in enumerate(gaits):
-                cmd = gait.command(core.time_ns * 1e-9)
+                cmd = gait.command(core.time_ns * 1e-9 + TIME_EPS)   # as the gait node asks
                 core.apply_command(k, list(topics.JOINT_NAMES), list(cmd.targets), [cmd.speed] * 2, core.time_ns)
             core.advance()
             instant.append(core.physics.fsr([0, 1]))
