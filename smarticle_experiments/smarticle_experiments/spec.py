@@ -10,6 +10,8 @@ A spec file is a mapping with these keys (every other key is refused, naming it)
     periods: 300                  # gait periods per trial (> 0)
     physics: {contact_erp: 0.6}   # PhysicsConfig overrides (default: the project's defaults)
     robot: {}                     # RobotSpec overrides
+    noise: paper                  # noise with a cause: 'paper' (the cited figures), 'none' (the default)
+                                  # or NoiseConfig fields, e.g. {clock_rate_sd: 0.003} (the others off)
     params: {robots: 7}           # the kind's scene / trial parameters (see `smarticle-experiments list -v`)
     analysis: {min_periods: 30}   # the kind's in-trial analysis parameters (same namespace as params)
     grid: {theta_deg: [0, 30]}    # parameter -> list of values; the trials are the product x seeds
@@ -18,7 +20,9 @@ A spec file is a mapping with these keys (every other key is refused, naming it)
     report: [p1, trajectories]    # report sections (report.SECTIONS)
     paper: {fraction: 0.64}       # the paper's values the report sections compare with
 
-Grid keys may name physics or robot fields as ``physics.time_step`` / ``robot.arm_mass``.
+Grid keys may name physics, robot or noise fields as ``physics.time_step`` / ``robot.arm_mass`` /
+``noise.clock_rate_sd``. A spec without noise leaves ``noise`` out of the trial parameters, so its trial
+keys are those of a spec written before noise existed.
 """
 
 from __future__ import annotations
@@ -35,14 +39,14 @@ from typing import Any
 import yaml
 
 from .errors import SpecError
-from .trials import KINDS, PHYSICS_FIELDS, ROBOT_FIELDS, resolve_kind, validate_params
+from .trials import KINDS, NOISE_FIELDS, PHYSICS_FIELDS, ROBOT_FIELDS, noise_mapping, resolve_kind, validate_params
 
 #: The sections a spec's ``report`` may name (``report.SECTIONS`` draws each; a test keeps the two equal).
 REPORT_SECTIONS: tuple[str, ...] = ('p1', 'trajectories', 'configurations', 'lifetimes', 'basin', 'alpha_sweep',
                                     'p6', 'drift', 'accuracy')
 
 SPEC_KEYS: tuple[str, ...] = ('name', 'description', 'kind', 'store', 'preset', 'periods', 'physics', 'robot',
-                              'params', 'analysis', 'grid', 'seeds', 'report', 'paper')
+                              'noise', 'params', 'analysis', 'grid', 'seeds', 'report', 'paper')
 
 
 @dataclass(frozen=True)
@@ -115,14 +119,17 @@ def coerce(default: Any, value: Any) -> Any:
 
 
 def apply_point(base: Mapping[str, Any], point: Mapping[str, Any]) -> dict[str, Any]:
-    """The base parameters with one grid point applied (``physics.X`` / ``robot.X`` go into those mappings)."""
+    """The base parameters with one grid point applied (``physics.X`` / ``robot.X`` / ``noise.X`` go into
+    those mappings)."""
     params = {**base}
     if 'physics' in base or 'robot' in base:
         params.update(physics=dict(base.get('physics') or {}), robot=dict(base.get('robot') or {}))
+    if 'noise' in base:
+        params['noise'] = dict(base['noise'])
     for name, value in point.items():
         group, dot, leaf = name.partition('.')
         if dot:
-            params[group][leaf] = value
+            params.setdefault(group, {})[leaf] = value
         else:
             params[name] = coerce(base.get(name), value)
     return params
@@ -160,9 +167,11 @@ def _grid_block(name: str, kind: str, known: Any, block: Mapping[str, Any]) -> d
     for key, values in block.items():
         group, dot, leaf = str(key).partition('.')
         if dot:
-            allowed = {'physics': PHYSICS_FIELDS, 'robot': ROBOT_FIELDS}.get(group)
-            if allowed is None or leaf not in allowed or (known is not None and group not in known.defaults):
-                raise SpecError(f'{name}: unknown key grid.{key} (not a physics or robot setting of kind {kind!r})')
+            allowed = {'physics': PHYSICS_FIELDS, 'robot': ROBOT_FIELDS, 'noise': NOISE_FIELDS}.get(group)
+            supported = 'physics' if group == 'noise' else group   # noise goes wherever physics does
+            if allowed is None or leaf not in allowed or (known is not None and supported not in known.defaults):
+                raise SpecError(f'{name}: unknown key grid.{key} '
+                                f'(not a physics, robot or noise setting of kind {kind!r})')
         elif known is not None and (key not in known.defaults or key in ('physics', 'robot')):
             raise SpecError(f'{name}: unknown key grid.{key} for kind {kind!r}')
         if not isinstance(values, list):
@@ -240,6 +249,15 @@ def spec_from_mapping(data: Any, source: str = '') -> ExperimentSpec:
             raise SpecError(f'{name}: {group} overrides are not supported by kind {kind!r}')
         if values or known is None or group in base:
             base[group] = values
+    if data.get('noise') is not None:
+        try:
+            noise = noise_mapping(data['noise'])
+        except SpecError as exc:
+            raise SpecError(f'{name}: {exc}') from None
+        if noise and known is not None and 'physics' not in known.defaults:
+            raise SpecError(f'{name}: noise is not supported by kind {kind!r}')
+        if noise:
+            base['noise'] = noise
     if 'preset' in data:
         if known is not None and 'preset' not in known.defaults:
             raise SpecError(f'{name}: preset is not supported by kind {kind!r}')

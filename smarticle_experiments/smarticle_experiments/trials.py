@@ -27,7 +27,7 @@ from smarticle_common.gait import GaitConfig
 from smarticle_sim.batch import Recording, run_trial
 from smarticle_sim.errors import SceneError
 from smarticle_sim.scenes import RobotPlacement, Scene, dense_scene, pair_scene
-from smarticle_sim.settings import PhysicsConfig, RobotSpec, SimConfig, robot_preset
+from smarticle_sim.settings import NoiseConfig, PhysicsConfig, RobotSpec, SimConfig, robot_preset
 from smarticle_tracking.gliders import Glider, GliderConfig, analyse_gliders
 from smarticle_tracking.msd import fit_msd_exponent, msd
 
@@ -38,10 +38,32 @@ TrialFunction = Callable[[Mapping[str, Any], int], dict[str, Any]]
 #: PhysicsConfig and RobotSpec field names a spec may override (``physics:`` and ``robot:`` mappings).
 PHYSICS_FIELDS: frozenset[str] = frozenset(f.name for f in fields(PhysicsConfig))
 ROBOT_FIELDS: frozenset[str] = frozenset(f.name for f in fields(RobotSpec)) - {'name'}
+#: NoiseConfig field names a spec may set (``noise:`` mapping; unset fields are off, ``NoiseConfig.none()``).
+NOISE_FIELDS: frozenset[str] = frozenset(f.name for f in fields(NoiseConfig))
 
 
-def make_config(preset: str, physics: Mapping[str, Any], robot: Mapping[str, Any]) -> SimConfig:
-    """The project's default SimConfig for ``preset`` with PhysicsConfig / RobotSpec overrides (validated)."""
+def noise_mapping(value: Any) -> dict[str, Any]:
+    """A spec's ``noise:`` value as NoiseConfig overrides: 'paper' (the cited figures), 'none' / {} / None
+    (off) or a mapping of NoiseConfig fields (the unset ones off). 'paper' is written out field by field,
+    so the trial key records the values, not the name."""
+    if value is None or value == 'none':
+        return {}
+    if value == 'paper':
+        paper = NoiseConfig.paper()
+        return {name: getattr(paper, name) for name in ('clock_rate_sd', 'servo_jitter', 'friction_sd',
+                                                         'friction_length')}
+    if not isinstance(value, Mapping):
+        raise SpecError(f"noise must be 'paper', 'none' or a mapping of NoiseConfig fields, got {value!r}")
+    unknown = sorted(set(value) - NOISE_FIELDS)
+    if unknown:
+        raise SpecError(f'noise.{unknown[0]} is not a NoiseConfig field; known: {", ".join(sorted(NOISE_FIELDS))}')
+    return dict(value)
+
+
+def make_config(preset: str, physics: Mapping[str, Any], robot: Mapping[str, Any],
+                noise: Mapping[str, Any] | None = None) -> SimConfig:
+    """The project's default SimConfig for ``preset`` with PhysicsConfig / RobotSpec overrides and the noise
+    sources of ``noise`` (NoiseConfig fields; every source not named is off), all validated."""
     unknown = sorted(set(physics) - PHYSICS_FIELDS)
     if unknown:
         raise SpecError(f'physics.{unknown[0]} is not a PhysicsConfig field; '
@@ -49,7 +71,8 @@ def make_config(preset: str, physics: Mapping[str, Any], robot: Mapping[str, Any
     unknown = sorted(set(robot) - ROBOT_FIELDS)
     if unknown:
         raise SpecError(f'robot.{unknown[0]} is not a RobotSpec field; known: {", ".join(sorted(ROBOT_FIELDS))}')
-    return SimConfig(replace(robot_preset(preset), **robot), replace(PhysicsConfig(), **physics))
+    return SimConfig(replace(robot_preset(preset), **robot), replace(PhysicsConfig(), **physics),
+                     replace(NoiseConfig.none(), **noise_mapping(noise)))
 
 
 def make_gait(config: SimConfig, alpha_max_deg: float, servo_speed: float | None = None,
@@ -61,7 +84,8 @@ def make_gait(config: SimConfig, alpha_max_deg: float, servo_speed: float | None
 
 def _config_of(p: Mapping[str, Any]) -> SimConfig:
     """SimConfig of a trial's parameters."""
-    return make_config(str(p['preset']), dict(p.get('physics') or {}), dict(p.get('robot') or {}))
+    return make_config(str(p['preset']), dict(p.get('physics') or {}), dict(p.get('robot') or {}),
+                       dict(p.get('noise') or {}))
 
 
 # ------------------------------------------------------------------ glider measurements
@@ -210,7 +234,7 @@ def accuracy_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
 
     physics = {**dict(p.get('physics') or {}), 'time_step': 1.0 / float(p['rate_hz']),
                'control_tick': float(p['control_tick']), 'solver_iterations': int(p['solver_iterations'])}
-    config = make_config(str(p['preset']), physics, dict(p.get('robot') or {}))
+    config = make_config(str(p['preset']), physics, dict(p.get('robot') or {}), dict(p.get('noise') or {}))
     gait = make_gait(config, p['alpha_max_deg'], p['servo_speed'])
     scene = pair_scene(config.robot, gait, float(p['r_bl']), math.radians(p['theta_deg']), math.radians(p['phi_deg']),
                        (0.0, float(p['phase2'])))
@@ -298,7 +322,7 @@ def validate_params(kind: str, params: Mapping[str, Any]) -> None:
     if kind not in KINDS or kind == 'p6':
         return
     try:
-        config = make_config(str(params['preset']), dict(params.get('physics') or {}), dict(params.get('robot') or {}))
+        config = _config_of(params)
         if kind == 'accuracy':
             make_config(str(params['preset']), {**dict(params.get('physics') or {}),
                                                 'time_step': 1.0 / float(params['rate_hz']),

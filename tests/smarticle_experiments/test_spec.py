@@ -56,6 +56,12 @@ def test_a_users_yaml_file_is_a_spec(tmp_path: Path) -> None:
     ({'kind': 'nope'}, 'nope'),
     ({'report': ['figure9']}, 'figure9'),
     ({'physics': {'contact_erp': 2.0}}, 'contact_erp'),
+    ({'noise': 'loud'}, 'noise'),
+    ({'noise': {'clock_rate': 0.01}}, 'noise.clock_rate'),
+    ({'noise': {'clock_rate_sd': -0.01}}, 'clock_rate_sd'),
+    ({'noise': {'friction_sd': 0.5}}, 'friction_sd'),
+    ({'grid': {'noise.servo_jiter': [0.01]}}, 'grid.noise.servo_jiter'),
+    ({'kind': 'p6', 'noise': 'paper', 'params': {}}, 'noise is not supported'),
 ])
 def test_bad_specs_are_refused_naming_the_field(change: dict, named: str) -> None:
     with pytest.raises(SpecError, match=named.replace('.', r'\.').replace('(', r'\(')):
@@ -81,3 +87,20 @@ def test_keys_follow_settings_seed_and_code_version() -> None:
     assert set(first).isdisjoint(t.key for t in other.trials(CODE))            # settings
     whole = spec_from_mapping({**TINY, 'params': {'robots': 3, 'alpha_max_deg': 90}})
     assert first == [t.key for t in whole.trials(CODE)]                        # 90 and 90.0 hash alike
+
+
+def test_noise_is_written_out_and_left_out_of_keys_when_off() -> None:
+    from smarticle_sim.settings import NoiseConfig
+
+    plain = [t.key for t in spec_from_mapping(TINY).trials(CODE)]
+    assert plain == [t.key for t in spec_from_mapping({**TINY, 'noise': 'none'}).trials(CODE)]
+    assert 'noise' not in spec_from_mapping(TINY).trials(CODE)[0].params
+    paper = spec_from_mapping({**TINY, 'noise': 'paper'}).trials(CODE)
+    expected = NoiseConfig.paper()
+    assert paper[0].params['noise'] == {'clock_rate_sd': expected.clock_rate_sd,
+                                        'servo_jitter': expected.servo_jitter,
+                                        'friction_sd': expected.friction_sd,
+                                        'friction_length': expected.friction_length}
+    assert set(plain).isdisjoint(t.key for t in paper)
+    grid = spec_from_mapping({**TINY, 'grid': {'noise.clock_rate_sd': [0.0, 0.003]}}).trials(CODE)
+    assert [t.params['noise'] for t in grid[::2]] == [{'clock_rate_sd': 0.0}, {'clock_rate_sd': 0.003}]

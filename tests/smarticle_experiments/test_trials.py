@@ -54,3 +54,14 @@ def test_a_dense_trial_reports_isolation_from_the_glider_analysis() -> None:
     for g in result['gliders']:
         assert 0.0 <= g['isolation'] <= 1.0
         assert g['isolated'] == (g['isolation'] >= 0.9)
+
+
+def test_a_trial_with_noise_differs_and_repeats() -> None:
+    """The spec's noise reaches the physics: seeded, so the same seed repeats, and it moves the robots."""
+    base = params('dense', robots=3, periods=3.0, min_periods=1)
+    noisy = {**base, 'noise': {'clock_rate_sd': 0.01, 'servo_jitter': 0.02, 'friction_sd': 0.1}}
+    quiet = KINDS['dense'].function(base, 4)
+    first, again = KINDS['dense'].function(noisy, 4), KINDS['dense'].function(noisy, 4)
+    assert first['trajectory_bl'] == again['trajectory_bl']
+    assert first['trajectory_bl'] != quiet['trajectory_bl']
+    assert first['trajectory_bl'][0] == quiet['trajectory_bl'][0]   # the same start: noise has its own streams
