@@ -149,12 +149,14 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
                    preset: str = 'feedback', start_time: float = 0.0,
                    base: tuple[float, float, float, tuple[float, float]] = C2_START,
                    r_bind_bl: float = R_BIND_BL, sample_every: int = 3, record_samples: bool = False,
-                   robot_changes: Mapping[str, float] | None = None, count_contacts: bool = False) -> PairTrial:
+                   robot_changes: Mapping[str, float] | None = None, count_contacts: bool = False,
+                   noise: Any = None) -> PairTrial:
     """Run one C2 pair for ``periods`` gait periods, with the impact controller when ``condition.feedback``.
 
     ``robot_changes`` replaces fields of the preset's ``RobotSpec`` (the sensitivity study of the assumed values).
     ``count_contacts`` lists the gait periods in which the robots touched at any physics step
     (``PairTrial.contact_periods``; a step hook, the trajectory is the same).
+    ``noise`` is a ``NoiseConfig`` (None: off); its draws take the trial ``seed`` unless it names its own.
     """
     from smarticle_sim.batch import run_trial
     from smarticle_sim.physics import Physics
@@ -166,6 +168,8 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
     config = SimConfig.from_preset(preset)
     if robot_changes:
         config = replace(config, robot=replace(config.robot, **dict(robot_changes)))  # type: ignore[arg-type]
+    if noise is not None and noise.enabled:
+        config = config.with_noise(noise if noise.seed is not None else replace(noise, seed=seed))
     gait = GaitConfig.from_degrees(condition.alpha_max_deg, servo_speed=config.robot.servo_speed)
     scene, (r, theta, phi) = c2_scene(config, gait, seed, base)
     feedback_controllers: list[FeedbackController] = []

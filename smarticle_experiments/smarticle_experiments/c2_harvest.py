@@ -1,0 +1,215 @@
+"""Where the feedback robot's C2 gliders live: their pair coordinates, harvested from dense open-loop runs.
+
+P6 starts a pair of feedback robots "in the C2 conformation". Rather than guess that conformation, this
+module lets the robots find it: it runs dense 7-robot trials of the feedback robot (in phase, open loop,
+as the paper's collectives start), finds every C2 glider with the glider analysis (the one bound rule of
+docs/gliders.md), and samples each glider's pair coordinates (r, theta, phi) at its period boundaries,
+where both robots, being in phase, are at the gait's start shape. The median over those samples is a
+start that ``pair_scene`` can place exactly (phases 0 and 0): ``p6.C2_START``.
+
+A pair is written in the order that puts theta in [0, 180) deg (robot 2 on robot 1's front side): the two
+orders of one C2 pair differ by about 180 deg in theta, and the median needs one of them.
+
+Command line: ``smarticle-c2-harvest --seeds 5000-5019 --periods 150 --out out/feedback/c2_harvest``
+(table on stdout, CSV of every sample, histogram PNG).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+import sys
+from collections.abc import Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+#: Periods skipped at the start of each glider (it settles onto its limit cycle first).
+SETTLE_PERIODS = 5
+#: Shortest glider that is harvested (periods): the paper's steady-state time, as in P1-P3.
+MIN_PERIODS = 30
+
+
+@dataclass(frozen=True)
+class C2Sample:
+    """One period boundary of one C2 glider."""
+
+    seed: int
+    i: int
+    j: int
+    period: int
+    r_bl: float
+    theta_deg: float
+    phi_deg: float
+
+
+def harvest_trial(seed: int, periods: float = 150.0, preset: str = 'feedback', alpha_max_deg: float = 90.0,
+                  robots: int = 7, min_periods: int = MIN_PERIODS, settle: int = SETTLE_PERIODS,
+                  sample_every: int = 4) -> list[C2Sample]:
+    """The C2 samples of one dense open-loop trial (seeded scene, in phase)."""
+    from smarticle_common.gait import GaitConfig
+    from smarticle_sim.batch import run_trial
+    from smarticle_sim.scenes import dense_scene
+    from smarticle_sim.settings import SimConfig
+    from smarticle_tracking.gliders import GliderClass, GliderConfig, analyse_gliders
+
+    config = SimConfig.from_preset(preset)
+    bl = config.robot.body_length
+    gait = GaitConfig.from_degrees(alpha_max_deg, servo_speed=config.robot.servo_speed)
+    scene = dense_scene(config.robot, gait, n=robots, seed=seed)
+    rec = run_trial(config, scene, periods, sample_every=sample_every, record_contacts=False)
+    cfg = GliderConfig(period=gait.period, r_bind=1.6 * bl, min_periods=min_periods, body_length=bl, width=bl)
+    analysis = analyse_gliders(rec.time, rec.poses, cfg, t0=0.0)
+    samples: list[C2Sample] = []
+    for g in analysis.gliders:
+        if g.glider_class is not GliderClass.C2:
+            continue
+        for k in range(g.start_period + settle, g.start_period + g.lifetime_periods):
+            idx = int(np.argmin(np.abs(rec.time - k * gait.period)))
+            if abs(rec.time[idx] - k * gait.period) > 1e-6:
+                continue
+            a, b, (r, theta, phi) = front_order(g.i, g.j, rec.poses[idx])
+            samples.append(C2Sample(seed, a, b, k, r / bl, theta, phi))
+    return samples
+
+
+def front_order(i: int, j: int, poses: np.ndarray) -> tuple[int, int, tuple[float, float, float]]:
+    """The pair (i, j) of one frame's poses (N, 3) in the order that puts theta in [0, 180) deg, with its
+    coordinates (r m, theta deg in [0, 180), phi deg in [0, 360))."""
+    from smarticle_common.pairs import one_pair
+
+    for a, b in ((i, j), (j, i)):
+        r, theta, phi = one_pair(poses[a], poses[b])
+        if math.degrees(theta) % 360.0 < 180.0:
+            break
+    return a, b, (r, math.degrees(theta) % 360.0, math.degrees(phi) % 360.0)
+
+
+def _harvest(args: tuple[int, float, str, float]) -> list[C2Sample]:
+    seed, periods, preset, alpha = args
+    return harvest_trial(seed, periods, preset, alpha)
+
+
+def harvest(seeds: Sequence[int], periods: float = 150.0, preset: str = 'feedback', alpha_max_deg: float = 90.0,
+            jobs: int = 2, progress: bool = True) -> list[C2Sample]:
+    """The C2 samples of every seed's trial, ``jobs`` processes in parallel."""
+    out: list[C2Sample] = []
+    with ProcessPoolExecutor(max_workers=max(1, jobs)) as pool:
+        for seed, samples in zip(seeds, pool.map(_harvest, [(s, periods, preset, alpha_max_deg) for s in seeds]),
+                                 strict=True):
+            out += samples
+            if progress:
+                n = len({(s.i, s.j) for s in samples})
+                sys.stderr.write(f'seed {seed}: {n} C2 gliders, {len(samples)} period samples\n')
+    return out
+
+
+def signed_deg(angle: np.ndarray) -> np.ndarray:
+    """Angles in degrees mapped to (-180, 180]."""
+    return -((-np.asarray(angle, dtype=float) + 180.0) % 360.0 - 180.0)
+
+
+def summary(samples: Sequence[C2Sample]) -> dict[str, float]:
+    """Median and quartiles of r, theta and phi (phi about 0: taken in (-180, 180]); glider and seed counts."""
+    if not samples:
+        raise ValueError('no C2 samples: no C2 glider of the minimum length formed in these trials')
+    r = np.array([s.r_bl for s in samples])
+    theta = np.array([s.theta_deg for s in samples])
+    phi = signed_deg(np.array([s.phi_deg for s in samples]))
+    out: dict[str, float] = {'samples': float(len(samples)),
+                             'gliders': float(len({(s.seed, min(s.i, s.j), max(s.i, s.j)) for s in samples})),
+                             'seeds': float(len({s.seed for s in samples}))}
+    for name, values in (('r_bl', r), ('theta_deg', theta), ('phi_deg', phi)):
+        q1, med, q3 = np.percentile(values, [25, 50, 75])
+        out.update({f'{name}_q1': float(q1), f'{name}_median': float(med), f'{name}_q3': float(q3)})
+    return out
+
+
+def format_summary(s: dict[str, float]) -> str:
+    """Markdown table of the harvest's medians and quartiles."""
+    rows = ['| coordinate | median | quartiles |', '| --- | ---: | --- |']
+    for name, label in (('r_bl', 'r (BL)'), ('theta_deg', 'theta (deg)'), ('phi_deg', 'phi (deg)')):
+        rows.append(f'| {label} | {s[f"{name}_median"]:.3f} | {s[f"{name}_q1"]:.3f} - {s[f"{name}_q3"]:.3f} |')
+    rows.append(f'\n{int(s["samples"])} period samples of {int(s["gliders"])} C2 gliders in {int(s["seeds"])} '
+                f'trials (the first {SETTLE_PERIODS} periods of each glider skipped).')
+    return '\n'.join(rows)
+
+
+def write_csv(samples: Sequence[C2Sample], path: Path) -> Path:
+    """Every sample as a CSV row."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open('w', newline='') as fh:
+        writer = csv.writer(fh)
+        writer.writerow(['seed', 'i', 'j', 'period', 'r_bl', 'theta_deg', 'phi_deg'])
+        for s in samples:
+            writer.writerow([s.seed, s.i, s.j, s.period, f'{s.r_bl:.5f}', f'{s.theta_deg:.3f}', f'{s.phi_deg:.3f}'])
+    return path
+
+
+def plot(samples: Sequence[C2Sample], path: Path) -> Path:
+    """Histograms of r, theta and phi of the harvested C2 samples, with their medians."""
+    import matplotlib
+
+    matplotlib.use('Agg')
+    from matplotlib.figure import Figure
+
+    s = summary(samples)
+    fig = Figure(figsize=(10, 3.2), dpi=110)
+    data = (('r_bl', 'r (BL)', [x.r_bl for x in samples]),
+            ('theta_deg', 'theta (deg)', [x.theta_deg for x in samples]),
+            ('phi_deg', 'phi (deg, signed)', list(signed_deg(np.array([x.phi_deg for x in samples])))))
+    for n, (key, label, values) in enumerate(data):
+        ax = fig.add_subplot(1, 3, n + 1)
+        ax.hist(values, bins=30, color='tab:blue', alpha=0.8)
+        ax.axvline(s[f'{key}_median'], color='k', lw=1.2, label=f'median {s[f"{key}_median"]:.2f}')
+        ax.set_xlabel(label)
+        ax.legend(fontsize=8)
+    fig.suptitle(f'C2 gliders of the feedback robot at period boundaries: {int(s["samples"])} samples, '
+                 f'{int(s["gliders"])} gliders, {int(s["seeds"])} trials', fontsize=10)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    return path
+
+
+def parse_seeds(text: str) -> list[int]:
+    """'5000-5019' or '1,2,3' -> seeds."""
+    if '-' in text:
+        lo, hi = (int(v) for v in text.split('-', 1))
+        if hi < lo:
+            raise ValueError(f'seed range {text!r} is empty')
+        return list(range(lo, hi + 1))
+    return [int(v) for v in text.split(',') if v.strip()]
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of `smarticle-c2-harvest`."""
+    parser = argparse.ArgumentParser(prog='smarticle-c2-harvest', description=__doc__.split('\n')[0])
+    parser.add_argument('--seeds', default='5000-5019', help="seed range 'a-b' or list 'a,b,c'")
+    parser.add_argument('--periods', type=float, default=150.0)
+    parser.add_argument('--alpha', type=float, default=90.0, help='alpha_max (deg)')
+    parser.add_argument('--preset', default='feedback')
+    parser.add_argument('--jobs', type=int, default=2)
+    parser.add_argument('--out', default='out/feedback/c2_harvest')
+    args = parser.parse_args(argv)
+    try:
+        seeds = parse_seeds(args.seeds)
+    except ValueError as exc:
+        parser.error(f'--seeds: {exc}')
+    samples = harvest(seeds, args.periods, args.preset, args.alpha, args.jobs)
+    try:
+        s = summary(samples)
+    except ValueError as exc:
+        sys.stderr.write(f'smarticle-c2-harvest: {exc}\n')
+        return 1
+    print(format_summary(s))
+    out = Path(args.out)
+    print(f'wrote {write_csv(samples, out / "c2_samples.csv")} and {plot(samples, out / "c2_harvest.png")}')
+    return 0
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())
