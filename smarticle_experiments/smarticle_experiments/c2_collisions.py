@@ -1,34 +1,44 @@
 """The collisions of a C2 cycle, measured: record a C2 pair step by step and list every contact event.
 
-``record_pair`` runs the P6 C2 start (``p6.C2_START``, seeded like ``p6.run_pair_trial``) open loop and
-records, at every physics step, both robots' FSR forces, which links touch and r; ``smarticle_feedback.
+``record_pair`` runs a P6 start (``p6.C2_START`` by default, seeded like ``p6.run_pair_trial``, with the
+same noise) open loop and records, at every physics step, both robots' FSR forces, which links touch and r; ``smarticle_feedback.
 collisions`` cuts that into events (gait quarter, links and faces, FSR peaks, dr) and their signature.
-Command line: ``smarticle-c2-collisions --periods 40 --out out/feedback/c2`` (table, CSV, PNG, npz).
+Command line: ``smarticle-c2-collisions --seed 1 --periods 150 --out out/feedback/c2`` (table, CSV, PNG,
+npz); ``--start colliding --noise none`` records the earlier start, which collides from its first period.
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from smarticle_common.gait import GaitConfig
 from smarticle_feedback.collisions import (CollisionRecord, find_events, format_events, format_signature,
                                            plot_events, signature, write_events_csv)
 
-from .p6 import C2_START, c2_scene
+from .p6 import C2_START, STARTS, c2_scene, p6_noise
 
 
 def record_pair(seed: int = 0, periods: float = 40.0, alpha_max_deg: float = 90.0, preset: str = 'feedback',
-                base: tuple[float, float, float, tuple[float, float]] = C2_START) -> CollisionRecord:
-    """Run the seed's C2 start open loop for ``periods`` and record every physics step."""
+                base: tuple[float, float, float, tuple[float, float]] = C2_START, noise: Any = None) -> CollisionRecord:
+    """Run the seed's C2 start open loop for ``periods`` and record every physics step.
+
+    ``noise``: a ``NoiseConfig`` (None: off), its draws from ``seed`` unless it names its own, as in P6.
+    """
+    from dataclasses import replace
+
     from smarticle_common.pairs import pair_coordinates
     from smarticle_sim.runner import Runner
     from smarticle_sim.settings import SimConfig
 
     config = SimConfig.from_preset(preset)
+    if noise is not None and noise.enabled:
+        config = config.with_noise(noise if noise.seed is not None else replace(noise, seed=seed))
     gait = GaitConfig.from_degrees(alpha_max_deg, servo_speed=config.robot.servo_speed)
     scene, _ = c2_scene(config, gait, seed, base)
     times: list[float] = []
@@ -48,10 +58,11 @@ def record_pair(seed: int = 0, periods: float = 40.0, alpha_max_deg: float = 90.
         assert runner.gaits is not None
         runner.gaits.start(0.0)
         runner.run(runner.ticks_for(periods * gait.period))
+        rates = runner.gaits.clock_rates
     coords = pair_coordinates(np.asarray(poses))
     return CollisionRecord(np.asarray(times), np.asarray(fsr), np.asarray(links),
                            coords.r[:, 0] / config.robot.body_length, gait.period,
-                           (float(base[3][0]), float(base[3][1])))
+                           (float(base[3][0]), float(base[3][1])), clock_rates=(float(rates[0]), float(rates[1])))
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -61,14 +72,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument('--periods', type=float, default=40.0)
     parser.add_argument('--alpha', type=float, default=90.0, help='alpha_max (deg)')
     parser.add_argument('--rows', type=int, default=24, help='events shown in the table on stdout')
+    parser.add_argument('--start', choices=sorted(STARTS), default='harvested',
+                        help='the P6 start (default harvested; colliding: robot 2 a quarter period ahead)')
+    parser.add_argument('--noise', choices=['paper', 'none'], default='paper',
+                        help='noise with a cause, as in P6 (default paper)')
     parser.add_argument('--out', default='out/feedback/c2', help='output folder')
     args = parser.parse_args(argv)
     out = Path(args.out)
-    rec = record_pair(args.seed, args.periods, args.alpha)
+    rec = record_pair(args.seed, args.periods, args.alpha, base=STARTS[args.start], noise=p6_noise(args.noise))
     rec.save(out / 'c2_steps.npz')
     events = find_events(rec)
     write_events_csv(events, out / 'c2_events.csv')
-    plot_events(rec, events, out / 'c2_events.png', (0.0, min(4.0, args.periods)))
+    first = math.floor((events[0].time - rec.start_time) / rec.period) if events else 0   # plot from the first event
+    plot_events(rec, events, out / 'c2_events.png', (float(first), float(min(first + 4, args.periods))))
     sys.stdout.write(format_events(events, limit=args.rows) + '\n\n' + format_signature(signature(events)) + '\n')
     sys.stdout.write(f'\n{len(events)} events in {args.periods:g} periods (seed {args.seed}); files in {out}/\n')
     return 0

@@ -33,14 +33,34 @@ from smarticle_feedback.controller import FeedbackConfig, ImpactController
 if TYPE_CHECKING:
     from smarticle_sim.runner import Runner
 
-#: The C2 start of the feedback robot (r in BL, theta, phi in deg, phases): with robot 2 a quarter period
-#: ahead (the paper's basin-scan phase p = 0.25) the pair collides every half cycle (docs/feedback.md). A
-#: start half a period apart (phases 0 and 0.5) looks longer-lived by r alone but is not a glider at the
-#: converged physics: after the first period the robots never touch again and r creeps from 1.48 BL by the
-#: single-robot drift (0.0012 BL per period), crossing r_bind after about 100 periods.
-C2_START = (1.3, 0.0, 350.0, (0.0, 0.25))
+#: The C2 start of the feedback robot (r in BL, theta, phi in deg, phases): where its C2 gliders live.
+#: ``smarticle-c2-harvest --seeds 5000-5039 --periods 150`` ran 40 dense open-loop trials of 7 feedback
+#: robots (90 deg, in phase, as the paper's collectives start) and sampled every C2 glider at its period
+#: boundaries: 3705 samples of 36 gliders in 26 trials, median r 1.474 BL (quartiles 1.390-1.515), theta
+#: 98.8 deg (76.0-116.3), phi 6.6 deg (-3.5-20.7); docs/feedback.md. In phase and alone, such a pair does
+#: not touch: the robots' gait clocks (noise with a cause, ``p6_noise``) bring them into contact.
+C2_START = (1.47, 99.0, 7.0, (0.0, 0.0))
+#: A pair that collides from its first period (robot 2 a quarter period ahead, the paper's basin-scan
+#: phase p = 0.25, side by side): the earlier P6 start, kept for the tests of the feedback paths, which
+#: need halts within a few periods, and as ``--start colliding``.
+COLLIDING_START = (1.3, 0.0, 350.0, (0.0, 0.25))
+#: The named starts of ``smarticle-p6 --start`` and ``smarticle-c2-collisions --start``.
+STARTS = {'harvested': C2_START, 'colliding': COLLIDING_START}
 #: Seeded jitter of the start (r in BL, theta and phi in deg).
 C2_JITTER = (0.04, 4.0, 4.0)
+def p6_noise(name: str = 'paper') -> Any:
+    """``NoiseConfig`` of a ``--noise`` name: 'paper' (every source at its cited default; the draws take the
+    trial seed) or 'none' (None). The paper's robots start in phase and drift apart in phase; without
+    clock noise two in-phase robots at the C2 start never touch."""
+    from smarticle_sim.settings import NoiseConfig
+
+    if name == 'paper':
+        return NoiseConfig.paper()
+    if name == 'none':
+        return None
+    raise ValueError(f"noise must be 'paper' or 'none', got {name!r}")
+
+
 #: Draws of the jittered start before giving up when they overlap (robots' arms at the start phases).
 START_ATTEMPTS = 20
 
@@ -216,15 +236,21 @@ def default_feedback_config() -> FeedbackConfig:
     return config_from_values(default_values())
 
 
-def _run(args: tuple[Condition, int, float, bool]) -> PairTrial:
-    condition, seed, periods, contacts = args
-    return run_pair_trial(condition, seed, periods, count_contacts=contacts)
+def _run(args: tuple[Condition, int, float, bool, str, str]) -> PairTrial:
+    condition, seed, periods, contacts, start, noise = args
+    return run_pair_trial(condition, seed, periods, count_contacts=contacts, base=STARTS[start],
+                          noise=p6_noise(noise))
 
 
 def run_p6(conditions: Sequence[Condition], seeds: Sequence[int], periods: float, jobs: int = 2,
-           progress: bool = True, contacts: bool = False) -> list[PairTrial]:
-    """Every (condition, seed) trial, ``jobs`` processes in parallel (at most 2 on the shared machine)."""
-    work = [(c, s, periods, contacts) for c in conditions for s in seeds]
+           progress: bool = True, contacts: bool = False, start: str = 'harvested',
+           noise: str = 'paper') -> list[PairTrial]:
+    """Every (condition, seed) trial, ``jobs`` processes in parallel (at most 2 on the shared machine), from
+    the named ``start`` (``STARTS``) with the named ``noise`` (``p6_noise``)."""
+    if start not in STARTS:
+        raise ValueError(f'start must be one of {", ".join(STARTS)}, got {start!r}')
+    p6_noise(noise)
+    work = [(c, s, periods, contacts, start, noise) for c in conditions for s in seeds]
     trials: list[PairTrial] = []
     with ProcessPoolExecutor(max_workers=max(1, jobs)) as pool:
         for trial in pool.map(_run, work):
@@ -409,7 +435,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of `smarticle-p6`: table on stdout, CSV and PNGs in --out."""
     parser = argparse.ArgumentParser(prog='smarticle-p6', description=__doc__.split('\n')[0])
     parser.add_argument('--seeds', type=int, default=40)
-    parser.add_argument('--periods', type=float, default=100.0)
+    parser.add_argument('--periods', type=float, default=200.0)
     parser.add_argument('--open-loop', type=float, nargs='+', default=[70.0, 80.0, 85.0, 90.0],
                         help='open-loop amplitudes (deg)')
     parser.add_argument('--feedback', type=float, nargs='+', default=[90.0], help='feedback amplitudes (deg)')
@@ -417,6 +443,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument('--out', default='out/feedback', help='output folder')
     parser.add_argument('--contacts', action='store_true',
                         help='also count the periods in which the robots touch (a step hook per trial)')
+    parser.add_argument('--start', choices=sorted(STARTS), default='harvested',
+                        help='harvested: where the C2 gliders of dense runs live (default); colliding: the earlier '
+                             'start, robot 2 a quarter period ahead')
+    parser.add_argument('--noise', choices=['paper', 'none'], default='paper',
+                        help='noise with a cause: paper (the cited defaults, default) or none')
     parser.add_argument('--quick', action='store_true', help='3 seeds, 30 periods, open loop 90 vs feedback 90')
     args = parser.parse_args(argv)
     if args.quick:
@@ -425,7 +456,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     wall = time.perf_counter()
-    trials = run_p6(conditions, range(args.seeds), args.periods, min(args.jobs, 2), contacts=args.contacts)
+    trials = run_p6(conditions, range(args.seeds), args.periods, min(args.jobs, 2), contacts=args.contacts,
+                    start=args.start, noise=args.noise)
     rows = summarize(trials, args.periods)
     with (out / 'p6_trials.csv').open('w', newline='') as handle:
         writer = csv.writer(handle)

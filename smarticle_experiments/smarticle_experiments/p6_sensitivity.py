@@ -1,9 +1,10 @@
 """Which assumed values of the feedback robot move the open-loop C2 lifetime (``FEEDBACK_ASSUMED``).
 
 Each row changes one assumed ``RobotSpec`` field of the ``feedback`` preset (the others at their
-defaults) and runs the P6 open-loop C2 trial (``p6.run_pair_trial``) for the same seeds; the table gives
+defaults) and runs the P6 open-loop C2 trial (``p6.run_pair_trial``: the harvested start with the cited
+noise, as ``smarticle-p6`` runs it) for the same seeds; the table gives
 the mean lifetime (periods, censored at the end of the run) +- SE, the censored count and the final r.
-Command line: ``smarticle-p6-sensitivity --seeds 10 --periods 100 --out out/feedback/sensitivity``.
+Command line: ``smarticle-p6-sensitivity --seeds 10 --periods 200 --out out/feedback/sensitivity``.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from pathlib import Path
 import numpy as np
 from smarticle_common.facts import FEEDBACK
 
-from .p6 import Condition, run_pair_trial
+from .p6 import Condition, p6_noise, run_pair_trial
 
 #: (field, value) of each row; None = the preset itself. Heights change with their clearance kept; the
 #: servo speed stays high enough for a 90 deg amplitude's 180 deg stroke to end within a 0.4 s quarter.
@@ -46,7 +47,8 @@ def run(seeds: Sequence[int], periods: float, alpha_max_deg: float = 90.0,
     rows: list[dict[str, object]] = []
     for variant in variants:
         changes = {} if variant is None else {variant[0]: variant[1]}
-        trials = [run_pair_trial(Condition(alpha_max_deg, False), s, periods, robot_changes=changes) for s in seeds]
+        trials = [run_pair_trial(Condition(alpha_max_deg, False), s, periods, robot_changes=changes,
+                                 noise=p6_noise('paper')) for s in seeds]
         life = np.array([t.lifetime_periods for t in trials], dtype=float)
         rows.append({'variant': label(variant), 'n': len(trials), 'mean_lifetime': float(life.mean()),
                      'se_lifetime': float(life.std(ddof=1) / math.sqrt(life.size)) if life.size > 1 else math.nan,
@@ -71,7 +73,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of `smarticle-p6-sensitivity`: table on stdout, CSV in --out."""
     parser = argparse.ArgumentParser(prog='smarticle-p6-sensitivity', description=__doc__.split('\n')[0])
     parser.add_argument('--seeds', type=int, default=10)
-    parser.add_argument('--periods', type=float, default=100.0)
+    parser.add_argument('--periods', type=float, default=200.0)
     parser.add_argument('--alpha', type=float, default=90.0, help='alpha_max (deg)')
     parser.add_argument('--out', default='out/feedback/sensitivity')
     args = parser.parse_args(argv)

@@ -168,8 +168,8 @@ def _grid_block(name: str, kind: str, known: Any, block: Mapping[str, Any]) -> d
         group, dot, leaf = str(key).partition('.')
         if dot:
             allowed = {'physics': PHYSICS_FIELDS, 'robot': ROBOT_FIELDS, 'noise': NOISE_FIELDS}.get(group)
-            supported = 'physics' if group == 'noise' else group   # noise goes wherever physics does
-            if allowed is None or leaf not in allowed or (known is not None and supported not in known.defaults):
+            unsupported = known is not None and group != 'noise' and group not in known.defaults
+            if allowed is None or leaf not in allowed or unsupported:
                 raise SpecError(f'{name}: unknown key grid.{key} '
                                 f'(not a physics, robot or noise setting of kind {kind!r})')
         elif known is not None and (key not in known.defaults or key in ('physics', 'robot')):
@@ -254,8 +254,6 @@ def spec_from_mapping(data: Any, source: str = '') -> ExperimentSpec:
             noise = noise_mapping(data['noise'])
         except SpecError as exc:
             raise SpecError(f'{name}: {exc}') from None
-        if noise and known is not None and 'physics' not in known.defaults:
-            raise SpecError(f'{name}: noise is not supported by kind {kind!r}')
         if noise:
             base['noise'] = noise
     if 'preset' in data:

@@ -214,9 +214,11 @@ def single_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
 
 def p6_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
     """P6: a C2 pair of the feedback robot, open loop or with impact-halt feedback (the feedback package's trial)."""
-    from smarticle_experiments.p6 import Condition, run_pair_trial
+    from smarticle_experiments.p6 import STARTS, Condition, run_pair_trial
 
-    trial = run_pair_trial(Condition(float(p['alpha_max_deg']), bool(p['feedback'])), seed, float(p['periods']))
+    noise = replace(NoiseConfig.none(), **noise_mapping(p.get('noise'))) if p.get('noise') else None
+    trial = run_pair_trial(Condition(float(p['alpha_max_deg']), bool(p['feedback'])), seed, float(p['periods']),
+                           base=STARTS[str(p['start'])], noise=noise)
     return {'lifetime_periods': int(trial.lifetime_periods), 'censored': bool(trial.censored),
             'halts': len(trial.halts), 'trouble': trial.trouble,
             'r0_bl': trial.start[0], 'theta0_deg': trial.start[1], 'phi0_deg': trial.start[2],
@@ -282,7 +284,7 @@ KINDS: dict[str, TrialKind] = {
                       'two robots from pair coordinates (P4 basin scan, P5 alpha_max sweep)'),
     'single': TrialKind(single_trial, {**_COMMON, 'periods': 20.0, 'sample_every': 1},
                         'one robot alone, drift per cycle (P7)'),
-    'p6': TrialKind(p6_trial, {'periods': 100.0, 'alpha_max_deg': 90.0, 'feedback': False},
+    'p6': TrialKind(p6_trial, {'periods': 100.0, 'alpha_max_deg': 90.0, 'feedback': False, 'start': 'harvested'},
                     'C2 pair of the feedback robot, open loop or feedback (P6; smarticle_experiments.p6)'),
     'accuracy': TrialKind(accuracy_trial, {**_COMMON, 'periods': 20.0, 'single_periods': 10.0, 'rate_hz': 240.0,
                                            'control_tick': 1.0 / 60.0, 'solver_iterations': 50, 'r_bl': 1.4,
@@ -319,9 +321,16 @@ def trial_function(kind: str) -> TrialFunction:
 
 def validate_params(kind: str, params: Mapping[str, Any]) -> None:
     """Raise SpecError (ValueError) if the merged params of a built-in kind make no valid config or gait."""
-    if kind not in KINDS or kind == 'p6':
+    if kind not in KINDS:
         return
     try:
+        if kind == 'p6':
+            from smarticle_experiments.p6 import STARTS
+
+            if params['start'] not in STARTS:
+                raise SpecError(f'params.start must be one of {", ".join(STARTS)}, got {params["start"]!r}')
+            replace(NoiseConfig.none(), **noise_mapping(params.get('noise')))
+            return
         config = _config_of(params)
         if kind == 'accuracy':
             make_config(str(params['preset']), {**dict(params.get('physics') or {}),

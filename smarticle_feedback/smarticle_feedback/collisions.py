@@ -48,6 +48,8 @@ class CollisionRecord:
     period: float            # gait period (s)
     phases: tuple[float, float]
     start_time: float = 0.0
+    #: Each robot's gait clock rate (1 + eps, noise with a cause): its gait time is (t - start) * rate.
+    clock_rates: tuple[float, float] = (1.0, 1.0)
 
     def __post_init__(self) -> None:
         s = self.times.shape[0]
@@ -64,7 +66,7 @@ class CollisionRecord:
         path.parent.mkdir(parents=True, exist_ok=True)
         np.savez_compressed(path, times=self.times, fsr=self.fsr, links=self.links, r=self.r,
                             period=self.period, phases=np.asarray(self.phases), start_time=self.start_time,
-                            kind='collision_steps')
+                            clock_rates=np.asarray(self.clock_rates), kind='collision_steps')
         return path
 
 
@@ -75,9 +77,10 @@ def load_record(path: str | Path) -> CollisionRecord:
             raise CalibrationInputError(f'{path}: not a per-step collision record (record one with '
                                         '`smarticle-c2-collisions`)')
         phases = data['phases']
+        rates = data['clock_rates'] if 'clock_rates' in data.files else np.ones(2)   # records before noise
         return CollisionRecord(data['times'], data['fsr'], data['links'].astype(bool), data['r'],
                                float(data['period']), (float(phases[0]), float(phases[1])),
-                               float(data['start_time']))
+                               float(data['start_time']), (float(rates[0]), float(rates[1])))
 
 
 @dataclass(frozen=True)
@@ -137,7 +140,8 @@ def find_events(rec: CollisionRecord, merge_gap: float = MERGE_GAP, settle: floa
         total = rec.fsr[seg].sum(axis=(1, 2))
         peak_at = first + int(np.argmax(total))
         t_peak = float(times[peak_at])
-        taus = [(t_peak - rec.start_time) / rec.period + p for p in rec.phases]
+        taus = [(t_peak - rec.start_time) * rate / rec.period + p for p, rate in zip(rec.phases, rec.clock_rates,
+                                                                                   strict=True)]
         quarters = (int(math.floor(4.0 * taus[0])) % 4, int(math.floor(4.0 * taus[1])) % 4)
         periods = (int(math.floor(taus[0])), int(math.floor(taus[1])))
         touched = np.asarray(rec.links[seg].any(axis=0), dtype=bool)

@@ -295,7 +295,9 @@ class FeedbackController:
     """Feeds every tick's FSR forces to per-robot policies; a halt decision halts that robot's gait.
 
     Put it before the ``GaitController`` in the runner's controllers, so that a halt is part of the tick
-    it was decided in. Halts that took effect are listed in ``halts`` as (time, robot, face).
+    it was decided in. Halts that took effect are listed in ``halts`` as (time, robot, face). Each policy
+    is given its robot's gait clock (``GaitController.local_time``), the sim time unless clock-rate noise
+    is on, so its gait periods are the gait's.
 
     With ``peak_hold`` (the default) a tick's FSR sample is the largest force of each face over the physics
     steps since the previous sample (a step hook on the runner), not the force at the tick's instant:
@@ -333,6 +335,8 @@ class FeedbackController:
         if self.samples is not None:
             self.samples.append((now, np.array(forces)))
         for row, k in enumerate(self._robots):
-            decision = self.policies[k].update(now, forces[row])
+            # the policy keeps the robot's own time, as its gait does (the same board clock; with clock-rate
+            # noise the two would otherwise disagree on where a gait period begins)
+            decision = self.policies[k].update(self.gaits.local_time(k, now), forces[row])
             if decision.halt and self.gaits.halt(k):
                 self.halts.append((now, k, decision.face or ''))

@@ -29,7 +29,7 @@ from smarticle_common.launching import DomainReservation, ProcessGroup, isolated
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))   # the repository root: tests.* helpers
 from smarticle_sim.settings import SimConfig
-from smarticle_experiments.p6 import C2_START, Condition, c2_start, pair_lifetime, run_pair_trial
+from smarticle_experiments.p6 import COLLIDING_START, Condition, c2_start, pair_lifetime, run_pair_trial
 from tests.benchmarks._common import markdown_table, out_path, write_csv
 
 START_AT = 0.5
@@ -40,8 +40,8 @@ SERVO_SPEED = SimConfig.from_preset('feedback').robot.servo_speed
 
 def ros_trial(seed: int, periods: float, workdir: Path, probe: object) -> dict[str, float]:
     """One seed through the ROS path; returns halts, lifetime and final r."""
-    r, theta, phi = c2_start(seed)
-    phases = C2_START[3]
+    r, theta, phi = c2_start(seed, COLLIDING_START)
+    phases = COLLIDING_START[3]
     duration = START_AT + periods * 1.6
     poses: list[tuple[float, np.ndarray]] = []
     halts: list[tuple[float, str]] = []
@@ -105,7 +105,8 @@ def main() -> None:
         with tempfile.TemporaryDirectory() as tmp:
             for seed in range(args.seeds):
                 ros = ros_trial(seed, args.periods, Path(tmp) / f'seed{seed}', probe)
-                batch = run_pair_trial(Condition(90.0, True), seed, args.periods, start_time=START_AT)
+                batch = run_pair_trial(Condition(90.0, True), seed, args.periods, start_time=START_AT,
+                                       base=COLLIDING_START)
                 rows.append({'seed': seed, 'batch_halts': len(batch.halts), 'ros_halts': ros['halts'],
                              'batch_lifetime': batch.lifetime_periods, 'ros_lifetime': ros['lifetime'],
                              'batch_final_r': float(batch.r[-1]), 'ros_final_r': ros['final_r']})

@@ -61,7 +61,7 @@ def test_a_users_yaml_file_is_a_spec(tmp_path: Path) -> None:
     ({'noise': {'clock_rate_sd': -0.01}}, 'clock_rate_sd'),
     ({'noise': {'friction_sd': 0.5}}, 'friction_sd'),
     ({'grid': {'noise.servo_jiter': [0.01]}}, 'grid.noise.servo_jiter'),
-    ({'kind': 'p6', 'noise': 'paper', 'params': {}}, 'noise is not supported'),
+    ({'kind': 'p6', 'params': {'start': 'somewhere'}}, 'params.start'),
 ])
 def test_bad_specs_are_refused_naming_the_field(change: dict, named: str) -> None:
     with pytest.raises(SpecError, match=named.replace('.', r'\.').replace('(', r'\(')):

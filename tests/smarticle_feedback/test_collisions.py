@@ -43,6 +43,17 @@ def test_events_carry_quarter_links_peaks_and_dr() -> None:
     assert 'compression' in format_events(events)
 
 
+def test_quarters_follow_each_robots_own_clock(tmp_path: Path) -> None:
+    """With clock-rate noise a robot's gait time is (t - start) * rate: its quarter is read on its own clock."""
+    base = synthetic_record([(0.1, 0, 9.0, 0.03)], seconds=0.5)
+    rec = CollisionRecord(base.times, base.fsr, base.links, base.r, 1.6, (0.0, 0.0), clock_rates=(1.0, 5.0))
+    (event,) = find_events(rec)
+    assert event.quarters == (0, 1)          # robot 1's clock reads 0.5 s = 0.3125 periods at t = 0.1 s
+    again = load_record(rec.save(tmp_path / 'rates.npz'))
+    assert again.clock_rates == (1.0, 5.0)
+    assert load_record(base.save(tmp_path / 'plain.npz')).clock_rates == (1.0, 1.0)
+
+
 def test_windows_separate_compression_from_bracing(tmp_path: Path) -> None:
     kicks = [(0.1 + 0.4 * i, 2, 8.0 + 0.1 * i, 0.02) for i in range(4)]        # hard compression kicks
     kicks += [(0.3 + 0.4 * i, 2, 3.0 + 0.1 * i, -0.02) for i in range(4)]      # light bracing kicks, same face

@@ -94,12 +94,12 @@ def test_a_recorded_c2_force_trace_halts_the_hardware_path_at_the_batch_periods(
     import threading
 
     from smarticle_common.topics import FSR_FACES
-    from smarticle_experiments.p6 import Condition, run_pair_trial
+    from smarticle_experiments.p6 import COLLIDING_START, Condition, run_pair_trial
 
     from tests.helpers.hardware_rig import FSR_CHANNEL, volts_for
 
     period, periods = 1.6, 5
-    batch = run_pair_trial(Condition(90.0, True), SEED, periods, record_samples=True)
+    batch = run_pair_trial(Condition(90.0, True), SEED, periods, record_samples=True, base=COLLIDING_START)
     expected = sorted({math.floor(t / period) for t, robot, _ in batch.halts if robot == 0})
     assert len(expected) >= 2, batch.halts
     tick = batch.samples[1][0] - batch.samples[0][0]

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from smarticle_common import topics
 from smarticle_common.gait import GaitConfig
-from smarticle_experiments.p6 import C2_START, c2_scene, default_feedback_config
+from smarticle_experiments.p6 import COLLIDING_START, c2_scene, default_feedback_config
 from smarticle_feedback.controller import ImpactController
 from smarticle_sim.bridge import BridgeSettings
 from smarticle_sim.runner import FeedbackController, Runner
@@ -34,8 +34,8 @@ def _start() -> tuple[SimConfig, dict[str, Any]]:
     """The feedback robot's config and the sim bridge parameters of seed SEED's C2 start."""
     config = SimConfig.from_preset('feedback')
     gait = GaitConfig.from_degrees(90.0, servo_speed=config.robot.servo_speed)
-    _, (r, theta, phi) = c2_scene(config, gait, SEED)
-    phases = C2_START[3]
+    _, (r, theta, phi) = c2_scene(config, gait, SEED, COLLIDING_START)   # collides at once: halts early
+    phases = COLLIDING_START[3]
     return config, {'preset': 'feedback', 'scene': 'pair', 'pair_r': r, 'pair_theta_deg': theta,
                     'pair_phi_deg': phi, 'pair_phase_0': phases[0], 'pair_phase_1': phases[1],
                     'alpha_max_deg': 90.0, 'publish_period': config.physics.control_tick,
@@ -50,7 +50,7 @@ def _batch(config: SimConfig, params: dict[str, Any], ticks: int) -> tuple[dict[
     runner.gaits.start(START_AT)
     feedback = default_feedback_config()
     policies = {k: ImpactController(replace(feedback, period=settings.gait.period, phase=p))
-                for k, p in enumerate(C2_START[3])}
+                for k, p in enumerate(COLLIDING_START[3])}
     for policy in policies.values():
         policy.start(START_AT)
     controller = FeedbackController(runner.gaits, policies)
@@ -84,7 +84,7 @@ def _ros(nodes: Any, probe: Any, params: dict[str, Any], config: SimConfig, dura
             Header, topics.topic('halt', k),
             lambda m, k=k: halts.append((m.stamp.sec * 10**9 + m.stamp.nanosec, k, m.frame_id)),
             topics.qos_profile(topics.Qos.COMMAND)))
-    phases = C2_START[3]
+    phases = COLLIDING_START[3]
     for k in range(2):
         nodes.start('gait', '--ros-args', '-r', f'__node:=gait_{k}', '-p', f'robot_id:={k}',
                     '-p', 'lockstep:=true', '-p', 'wait_for_feedback:=true', '-p', 'alpha_max_deg:=90.0',

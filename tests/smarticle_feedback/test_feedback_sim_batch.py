@@ -12,14 +12,15 @@ from smarticle_common.topics import FSR_FACES
 from smarticle_common.runs import Recording, save_npz
 
 from smarticle_feedback import impact_window
-from smarticle_experiments.p6 import C2_START, Condition, c2_start, run_pair_trial, summarize
+from smarticle_experiments.p6 import C2_START, COLLIDING_START, Condition, c2_start, p6_noise, run_pair_trial, summarize
 
 
 @pytest.fixture(scope='module')
 def feedback_trials() -> tuple:
-    """The same seed twice with feedback, once open loop (4 periods each)."""
+    """The same seed twice with feedback, once open loop (4 periods each), from the start that collides at once."""
     fb = Condition(90.0, True)
-    return (run_pair_trial(fb, 1, 4), run_pair_trial(fb, 1, 4), run_pair_trial(Condition(90.0, False), 1, 4))
+    return (run_pair_trial(fb, 1, 4, base=COLLIDING_START), run_pair_trial(fb, 1, 4, base=COLLIDING_START),
+            run_pair_trial(Condition(90.0, False), 1, 4, base=COLLIDING_START))
 
 
 def test_the_batch_feedback_path_is_deterministic(feedback_trials: tuple) -> None:
@@ -33,12 +34,25 @@ def test_c2_collisions_halt_each_robot_at_most_once_per_period(feedback_trials: 
     assert fb.halts, 'the compressed C2 start must produce impacts inside the default window'
     assert not open_loop.halts
     periods = [(robot, math.floor(t / 1.6 + phase)) for t, robot, _ in fb.halts
-               for phase in [C2_START[3][robot]]]
+               for phase in [COLLIDING_START[3][robot]]]
     assert len(periods) == len(set(periods)), periods
     assert all(face in FSR_FACES for _, _, face in fb.halts)
     assert not np.array_equal(fb.r, open_loop.r), 'halting changes the pair dynamics'
     rows = summarize([fb, open_loop], 4)
     assert [row['n'] for row in rows] == [1, 1]
+
+
+def test_the_harvested_c2_start_touches_only_when_the_clocks_drift() -> None:
+    """In phase and noise-free the harvested C2 pair does not touch; its clocks (noise) bring it into contact,
+    and a noisy trial repeats exactly for its seed."""
+    quiet = run_pair_trial(Condition(90.0, False), 2, 12, count_contacts=True)
+    assert quiet.contact_periods == [] and quiet.censored and quiet.lifetime_periods == 13
+    noisy = [run_pair_trial(Condition(90.0, True), 2, 30, count_contacts=True, noise=p6_noise('paper'))
+             for _ in range(2)]
+    assert noisy[0].contact_periods, 'seed 2: the gait clocks bring the pair into contact within 30 periods'
+    np.testing.assert_array_equal(noisy[0].r, noisy[1].r)
+    assert noisy[0].halts == noisy[1].halts
+    assert C2_START[3] == (0.0, 0.0)
 
 
 def test_seeds_jitter_the_start_slightly() -> None:

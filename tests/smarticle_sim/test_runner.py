@@ -89,6 +89,24 @@ def test_a_halt_is_part_of_the_tick_it_was_decided_in(config: SimConfig, gait90:
         assert physics.arm_angles()[0] == pytest.approx(held, abs=0.03)
 
 
+def test_a_policy_reads_its_robots_own_clock(config: SimConfig, gait90: GaitConfig) -> None:
+    """With clock-rate noise the feedback policy gets the robot's gait clock, the time its gait runs on."""
+    seen: list[float] = []
+
+    class Watch(HaltOnce):
+        def update(self, time: float, forces: np.ndarray) -> HaltOnce._Decision:
+            seen.append(time)
+            return super().update(time, forces)
+
+    with Physics(config, lone(gait90)) as physics:
+        gaits = GaitController(physics, [gait90], clock_rates=[0.25])
+        run = Runner(physics, [FeedbackController(gaits, {0: Watch(99.0)}), gaits])
+        gaits.start(0.2)
+        run.run(run.ticks_for(1.0))
+        ticks = np.arange(len(seen)) * physics.control_tick   # sim time of each tick
+        assert np.allclose(seen, 0.2 + (ticks - 0.2) * 1.25)   # the board clock from the start at 0.2 s
+
+
 def test_batch_trial_with_extra_controllers_is_deterministic(config: SimConfig, gait90: GaitConfig) -> None:
     scene = dense_scene(config.robot, gait90, 3, seed=4)
     halts: list[list[tuple[float, int, str]]] = []
