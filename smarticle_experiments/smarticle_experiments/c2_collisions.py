@@ -1,8 +1,8 @@
 """The collisions of a C2 cycle, measured: record a C2 pair step by step and list every contact event.
 
 ``record_pair`` runs a P6 start (``p6.C2_START`` by default, seeded like ``p6.run_pair_trial``, with the
-same noise) open loop and records, at every physics step, both robots' FSR forces, which links touch and r; ``smarticle_feedback.
-collisions`` cuts that into events (gait quarter, links and faces, FSR peaks, dr) and their signature.
+same noise) open loop and records, at every physics step, both robots' FSR forces, which links touch and
+r; ``smarticle_feedback.collisions`` cuts that into events (gait quarter, links and faces, FSR peaks, dr) and their signature.
 Command line: ``smarticle-c2-collisions --seed 1 --periods 150 --out out/feedback/c2`` (table, CSV, PNG,
 npz); ``--start colliding --noise none`` records the earlier start, which collides from its first period.
 """
@@ -83,7 +83,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     rec.save(out / 'c2_steps.npz')
     events = find_events(rec)
     write_events_csv(events, out / 'c2_events.csv')
-    first = math.floor((events[0].time - rec.start_time) / rec.period) if events else 0   # plot from the first event
+    first = math.floor((events[0].t_peak - rec.start_time) / rec.period) if events else 0   # plot from the first event
     plot_events(rec, events, out / 'c2_events.png', (float(first), float(min(first + 4, args.periods))))
     sys.stdout.write(format_events(events, limit=args.rows) + '\n\n' + format_signature(signature(events)) + '\n')
     sys.stdout.write(f'\n{len(events)} events in {args.periods:g} periods (seed {args.seed}); files in {out}/\n')
