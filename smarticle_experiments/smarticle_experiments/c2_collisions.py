@@ -2,7 +2,8 @@
 
 ``record_pair`` runs a P6 start (``p6.C2_START`` by default, seeded like ``p6.run_pair_trial``, with the
 same noise) open loop and records, at every physics step, both robots' FSR forces, which links touch and
-r; ``smarticle_feedback.collisions`` cuts that into events (gait quarter, links and faces, FSR peaks, dr) and their signature.
+r; ``smarticle_feedback.collisions`` cuts that into events (gait quarter, links and faces, FSR peaks, dr)
+and their signature.
 Command line: ``smarticle-c2-collisions --seed 1 --periods 150 --out out/feedback/c2`` (table, CSV, PNG,
 npz); ``--start colliding --noise none`` records the earlier start, which collides from its first period.
 """
