@@ -26,6 +26,7 @@ import numpy as np
 from smarticle_common.gait import GaitConfig
 from smarticle_sim.batch import Recording, run_trial
 from smarticle_sim.errors import SceneError
+from smarticle_sim.runner import ContactPeriods
 from smarticle_sim.scenes import RobotPlacement, Scene, dense_scene, pair_scene
 from smarticle_sim.settings import NoiseConfig, PhysicsConfig, RobotSpec, SimConfig, robot_preset
 from smarticle_tracking.gliders import Glider, GliderConfig, analyse_gliders
@@ -150,8 +151,22 @@ def dense_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
     config = _config_of(p)
     gait = make_gait(config, p['alpha_max_deg'], p['servo_speed'])
     scene = dense_scene(config.robot, gait, n=int(p['robots']), seed=seed, phase_jitter=float(p['phase_jitter']))
-    rec = run_trial(config, scene, float(p['periods']), sample_every=int(p['sample_every']), record_contacts=False)
-    return analyse_recording(config, rec, gait.period, p)
+    watch = ContactPeriods(gait.period) if p.get('contacts') else None
+    rec = run_trial(config, scene, float(p['periods']), sample_every=int(p['sample_every']), record_contacts=False,
+                    controllers=None if watch is None else (lambda physics, gaits: [watch]))
+    result = analyse_recording(config, rec, gait.period, p)
+    if watch is not None:
+        add_contact_fractions(result['gliders'], watch.periods)
+    return result
+
+
+def add_contact_fractions(gliders: Sequence[dict[str, Any]], periods: Mapping[tuple[int, int], set[int]]) -> None:
+    """Give each glider record ``contact_fraction``: the share of its bound periods in which its two robots
+    touched at some physics step (a pair bound by r alone can sit still side by side without touching)."""
+    for g in gliders:
+        touched = periods.get((min(g['i'], g['j']), max(g['i'], g['j'])), set())
+        span = range(g['start_period'], g['start_period'] + g['lifetime_periods'])
+        g['contact_fraction'] = round(sum(q in touched for q in span) / max(len(span), 1), 4)
 
 
 def pair_start(p: Mapping[str, Any], seed: int) -> tuple[float, float, float]:
@@ -276,7 +291,8 @@ _GLIDERS: dict[str, Any] = {'min_periods': 30, 'r_bind_bl': 1.6, 'isolation_w': 
                             'trajectory': True}
 
 KINDS: dict[str, TrialKind] = {
-    'dense': TrialKind(dense_trial, {**_COMMON, **_GLIDERS, 'robots': 7, 'phase_jitter': 0.0, 'sample_every': 4},
+    'dense': TrialKind(dense_trial, {**_COMMON, **_GLIDERS, 'robots': 7, 'phase_jitter': 0.0, 'sample_every': 4,
+                                     'contacts': False},
                        'N robots densely packed (P1, P2, P3)'),
     'pair': TrialKind(pair_trial, {**_COMMON, **_GLIDERS, 'periods': 75.0, 'r_bl': 1.3, 'theta_deg': 0.0,
                                    'phi_deg': 180.0, 'phase2': 0.0, 'start_jitter': [0.0, 0.0, 0.0],

@@ -357,6 +357,17 @@ class Physics:
                 out[a, b] = out[b, a] = True
         return out
 
+    def touching(self, max_distance: float = 0.0) -> set[tuple[int, int]]:
+        """Pairs (i, j), i < j, of robots with a contact point at distance <= ``max_distance`` (m) now."""
+        out: set[tuple[int, int]] = set()
+        index = self._robot_of_body
+        for point in self._client.getContactPoints():
+            if point[8] <= max_distance:
+                a, b = index.get(point[1]), index.get(point[2])
+                if a is not None and b is not None and a != b:
+                    out.add((a, b) if a < b else (b, a))
+        return out
+
     def link_contacts(self, a: int, b: int) -> np.ndarray:
         """(3, 3) bool: [i, j] True where link i of robot ``a`` touches link j of robot ``b`` (body, arm 1, arm 2)."""
         out = np.zeros((3, 3), dtype=bool)

@@ -340,3 +340,31 @@ class FeedbackController:
             decision = self.policies[k].update(self.gaits.local_time(k, now), forces[row])
             if decision.halt and self.gaits.halt(k):
                 self.halts.append((now, k, decision.face or ''))
+
+
+
+class ContactPeriods:
+    """A controller that only watches: for every pair of robots, the gait periods in which they touched at
+    any physics step (``periods[(i, j)]``, i < j; periods counted from ``start_time``).
+
+    Touching is ``Physics.touching`` (contact points at zero or negative distance, not the points Bullet
+    keeps within its contact margin).
+    """
+
+    def __init__(self, period: float, start_time: float = 0.0) -> None:
+        self.period, self.start_time = period, start_time
+        self.periods: dict[tuple[int, int], set[int]] = {}
+        self._attached = False
+
+    def _on_step(self, runner: Runner) -> None:
+        pairs = runner.physics.touching()
+        if pairs:
+            q = math.floor((runner.time - self.start_time) / self.period)
+            for key in pairs:
+                self.periods.setdefault(key, set()).add(q)
+
+    def before_tick(self, runner: Runner) -> None:
+        """Attach the step hook at the first tick."""
+        if not self._attached:
+            runner.step_hooks.append(self._on_step)
+            self._attached = True

@@ -65,3 +65,24 @@ def test_a_trial_with_noise_differs_and_repeats() -> None:
     assert first['trajectory_bl'] == again['trajectory_bl']
     assert first['trajectory_bl'] != quiet['trajectory_bl']
     assert first['trajectory_bl'][0] == quiet['trajectory_bl'][0]   # the same start: noise has its own streams
+
+
+def test_a_dense_trial_can_say_how_often_its_gliders_touch() -> None:
+    """``contacts: true`` watches every physics step: each glider gets the share of its periods with contact."""
+    p = params('dense', robots=3, periods=4.0, min_periods=1)
+    plain = KINDS['dense'].function(p, 2)
+    watched = KINDS['dense'].function({**p, 'contacts': True}, 2)
+    assert watched['trajectory_bl'] == plain['trajectory_bl']          # watching does not change the run
+    assert watched['gliders'], 'seed 2 binds a pair of 3 dense robots'
+    for g in watched['gliders']:
+        assert 0.0 <= g['contact_fraction'] <= 1.0
+    assert max(g['contact_fraction'] for g in watched['gliders']) == 1.0   # packed robots touch every period
+    assert all('contact_fraction' not in g for g in plain['gliders'])
+
+
+def test_contact_fractions_count_the_glider_span_only() -> None:
+    from smarticle_experiments.trials import add_contact_fractions
+
+    gliders = [{'i': 2, 'j': 0, 'start_period': 10, 'lifetime_periods': 4}]
+    add_contact_fractions(gliders, {(0, 2): {9, 10, 12, 14}})
+    assert gliders[0]['contact_fraction'] == 0.5                         # periods 10 and 12 of 10-13
