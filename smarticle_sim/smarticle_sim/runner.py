@@ -219,12 +219,14 @@ class GaitController:
         k = self.physics.check_robot(robot)
         gait = self._gaits[k]
         now = self.physics.time
-        local = self.local_time(k, now)
+        # the halt's time to the nanosecond, as a message stamp carries it: a halt in mid-stroke holds at the
+        # angle of that time, so the ROS path (whose gait node sees stamps) holds at the same angle bit for bit
+        local = self.local_time(k, round(now * 1e9) * 1e-9)
         if gait is None or not gait.halt(local):
             return False
         self._pending[k] = None   # a command still waiting for its servo frame never goes out
         self._pending_at[k] = math.inf
-        hold = gait.command(local + TIME_EPS)
+        hold = gait.command(self.local_time(k, now) + TIME_EPS)   # now + 1 ns is after the halt's rounded time
         self.physics.send(k, hold.targets, hold.speed)
         self._next_update[k] = now
         self._next_due = min(self._next_due, now)

@@ -115,7 +115,7 @@ def measure(halts: int, workdir: Path, bridge_source: Path | None = None) -> tup
                 n = 2 + 2 * i
                 spin_to(probe, rig.period_start(n) + 0.03)
                 before = len(rig.observed.halts)
-                rig.pulse('arm1_front', 15.0)     # inside the shipped arm1_front window [11.93, 21.08] N
+                rig.pulse('arm1_front', 11.0)     # inside the shipped arm1_front window [7.37, 15.07] N
                 spin_to(probe, rig.period_start(n + 1) - 0.05)
                 if len(rig.observed.halts) <= before:
                     continue

@@ -85,11 +85,17 @@ def test_a_record_that_is_not_one_is_refused(tmp_path: Path) -> None:
 
 
 def test_the_shipped_windows_can_be_checked_on_a_record(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    kicks = [(0.1 + 0.4 * i, 2, 8.0, 0.02) for i in range(3)] + [(0.3 + 0.4 * i, 2, 3.0, -0.02) for i in range(3)]
+    from smarticle_common.topics import FSR_FACES
+    from smarticle_feedback.parameters import DEFAULT_WINDOWS
+
+    face = next(n for n, name in enumerate(FSR_FACES) if DEFAULT_WINDOWS[name][2])   # a face the config enables
+    f_min, f_max, _ = DEFAULT_WINDOWS[FSR_FACES[face]]
+    hard, light = 0.5 * (f_min + f_max), 0.5 * f_min                         # inside and below its window
+    kicks = [(0.1 + 0.4 * i, face, hard, 0.02) for i in range(3)]
+    kicks += [(0.3 + 0.4 * i, face, light, -0.02) for i in range(3)]
     path = synthetic_record(kicks).save(tmp_path / 'c2_steps.npz')
-    assert impact_window.main([str(path), '--check-shipped']) == 0      # arm2_front ships [4.97, 13.27] N
+    assert impact_window.main([str(path), '--check-shipped']) == 0
     assert 'compression 3 of 3, bracing 0 of 3' in capsys.readouterr().out
     checked = impact_window.check_windows(find_events(load_record(path)), [
-        ('arm1_front', 0.0, 0.0, False), ('arm1_back', 0.0, 0.0, False), ('arm2_front', 1.0, 2.0, True),
-        ('arm2_back', 0.0, 0.0, False)])
+        (name, 1.0, 2.0, True) if n == face else (name, 0.0, 0.0, False) for n, name in enumerate(FSR_FACES)])
     assert checked.compression_caught == 0 and checked.problems

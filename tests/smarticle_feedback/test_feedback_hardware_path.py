@@ -7,6 +7,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from smarticle_feedback.parameters import DEFAULT_WINDOWS
 from tests.helpers.ros import spin_until
 from tests.helpers.fake_board import running_emulator
 
@@ -27,7 +28,7 @@ def test_an_fsr_impact_holds_the_emulated_servos_until_the_next_period(nodes: An
         t0 = rig.start(1.0)
         # during period 2's first quarter arm 1 strokes from +45 to -45 degrees (0.15 s of a 0.2 s quarter)
         spin_until(probe, lambda: time.time() >= rig.period_start(2) + 0.04, 10.0)
-        rig.pulse('arm1_front', 15.0)               # inside the shipped window [11.93, 21.08] N
+        rig.pulse('arm1_front', 11.0)               # inside the shipped window [7.37, 15.07] N
         assert spin_until(probe, lambda: len(rig.observed.halts) >= 1, 5.0), logs()
         spin_until(probe, lambda: time.time() >= rig.period_start(3) + 0.1, 10.0)
 
@@ -74,17 +75,18 @@ def test_impact_windows_change_at_once_and_bad_changes_are_refused(nodes: Any, r
         return len(halts)
 
     target = '/smarticle_5/feedback'
-    assert press(10.0, 15.0) == 1                          # inside the default window [11.93, 21.08] N
+    assert press(10.0, 11.0) == 1                          # inside the default window [7.37, 15.07] N
     for name, value, reason in (('arm1_front_min', 25.0, 'above f_max'), ('arm1_front_max', -1.0, 'out of range'),
                                 ('period', 2.0, 'read-only'), ('robot_id', 3, 'read-only')):
         ok, why = set_parameter(probe, target, name, value)
         assert not ok and reason in why, (name, why)
-    assert get_parameter(probe, target, 'arm1_front_min') == 11.93 and press(11.0, 15.0) == 2  # unchanged
-    assert set_parameter(probe, target, 'arm1_front_max', 14.0) == (True, '')
-    assert press(12.0, 15.0) == 2                          # 15 N is outside [11.93, 14] N now: no halt
-    assert press(13.0, 13.0) == 3
+    assert get_parameter(probe, target, 'arm1_front_min') == DEFAULT_WINDOWS['arm1_front'][0]   # unchanged
+    assert press(11.0, 11.0) == 2
+    assert set_parameter(probe, target, 'arm1_front_max', 10.0) == (True, '')
+    assert press(12.0, 11.0) == 2                          # 11 N is outside [7.37, 10] N now: no halt
+    assert press(13.0, 9.0) == 3
     assert set_parameter(probe, target, 'arm1_front_enabled', False) == (True, '')
-    assert press(14.0, 13.0) == 3
+    assert press(14.0, 9.0) == 3
 
 
 def test_a_recorded_c2_force_trace_halts_the_hardware_path_at_the_batch_periods(nodes: Any, ros_node: Any,
