@@ -450,10 +450,57 @@ def section_accuracy(ctx: Context) -> list[str]:
             *out, '', '![accuracy](accuracy.png)']
 
 
+#: A glider "touches" if its robots touched in at least this share of its bound periods (fixed before the
+#: first run that watched contacts, the spec p1_contacts).
+TOUCHING_SHARE = 0.5
+
+
+def section_contacts(ctx: Context) -> list[str]:
+    """How often gliders touch (dense trials with ``contacts: true``): per class, and P1 with touching gliders."""
+    pairs = ctx.ok()
+    gl = [g for g in _gliders(pairs) if g.get('contact_fraction') is not None]
+    if not gl:
+        return ['No glider carries a contact share: run the spec with `params: {contacts: true}`.']
+    limit = ctx.spec.base.get('positive_periods', 100)
+    lines = [f'A glider touches if its two robots touched (any physics step) in >= {TOUCHING_SHARE:.0%} of its '
+             'bound periods.', '',
+             '| gliders | n | touching [95 %] | median share of periods with contact | share 0 (never touched) |',
+             '| --- | ---: | --- | ---: | ---: |']
+    fig = figure(6, 4)
+    ax = fig.add_subplot(1, 1, 1)
+    for cls, colour in (('all', None), ('C1', 'tab:red'), ('C2', 'tab:blue'), ('unclassified', 'tab:gray')):
+        sel = gl if cls == 'all' else [g for g in gl if g['class'] == cls]
+        if not sel:
+            continue
+        share = np.array([g['contact_fraction'] for g in sel])
+        touching = wilson(int((share >= TOUCHING_SHARE).sum()), len(sel))
+        lines.append(f'| {cls} | {len(sel)} | {touching.text(".0%", 1)} | {np.median(share):.2f} | '
+                     f'{(share == 0).mean():.0%} |')
+        if colour is not None:
+            ax.hist(share, bins=np.linspace(0, 1, 21), alpha=0.6, color=colour, label=cls)
+    ax.set_xlabel('share of the glider\'s bound periods with contact')
+    ax.set_ylabel('gliders')
+    legend(ax, 7)
+    ctx.save(fig, 'contacts')
+    n = len(pairs)
+    positive = sum(any(g['lifetime_periods'] >= limit for g in r['gliders']) for _, r in pairs)
+    touching_pos = sum(any(g['lifetime_periods'] >= limit and (g.get('contact_fraction') or 0.0) >= TOUCHING_SHARE
+                           for g in r['gliders']) for _, r in pairs)
+    iso_touching = sum(any(g['lifetime_periods'] >= limit and g['isolated']
+                           and (g.get('contact_fraction') or 0.0) >= TOUCHING_SHARE for g in r['gliders'])
+                       for _, r in pairs)
+    lines += ['', f'| trials ({n}) with a glider >= {limit} periods | count [95 %] |', '| --- | --- |',
+              f'| any | {wilson(positive, n).text(".1%", 1)} ({positive}) |',
+              f'| touching | {wilson(touching_pos, n).text(".1%", 1)} ({touching_pos}) |',
+              f'| touching and isolated | {wilson(iso_touching, n).text(".1%", 1)} ({iso_touching}) |',
+              '', '![contacts](contacts.png)']
+    return lines
+
+
 SECTIONS: dict[str, Callable[[Context], list[str]]] = {
     'p1': section_p1, 'trajectories': section_trajectories, 'configurations': section_configurations,
     'lifetimes': section_lifetimes, 'basin': section_basin, 'alpha_sweep': section_alpha_sweep,
-    'p6': section_p6, 'drift': section_drift, 'accuracy': section_accuracy,
+    'p6': section_p6, 'drift': section_drift, 'accuracy': section_accuracy, 'contacts': section_contacts,
 }
 
 

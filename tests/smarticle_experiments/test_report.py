@@ -87,3 +87,20 @@ def test_seeds_are_listed_as_runs() -> None:
     assert seed_ranges([0, 1]) == '0, 1'
     assert seed_ranges([1000, 1001, *range(1003, 1022), 1023]) == '1000, 1001, 1003..1021, 1023'
     assert seed_ranges(list(range(151))) == '0..150'
+
+
+def test_the_contacts_section_counts_touching_gliders(tmp_path: Path) -> None:
+    spec = spec_from_mapping({'name': 'touch', 'kind': 'dense', 'seeds': 4, 'report': ['contacts'],
+                              'params': {'contacts': True}})
+    trials = spec.trials(CODE)
+    store = ResultStore(tmp_path / 'touch')
+    for t, share in zip(trials, [0.0, 0.2, 0.9, 1.0], strict=True):
+        result = dense_result(t.seed)
+        for g in result['gliders']:
+            g['contact_fraction'] = share
+        store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': {}, 'status': 'ok', 'result': result})
+    report = write_report(spec, trials, store, CODE).read_text()
+    assert '| all | 8 | 50% [' in report                  # 4 of 8 gliders touch in >= 50 % of their periods
+    assert '| C2 | 4 | 50% [' in report and '| 25% |' in report   # one trial's gliders never touched
+    assert '| any | 100.0% [' in report and '| touching | 50.0% [' in report
+    assert (store.folder / 'report-touch' / 'contacts.png').stat().st_size > 0
