@@ -1,0 +1,44 @@
+"""The P6 command lines on tiny runs: files written, tables printed, bad input refused."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from smarticle_experiments import c2_collisions, c2_harvest, p6
+
+
+def test_p6_writes_its_tables_and_figures(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / 'p6'
+    assert p6.main(['--seeds', '1', '--periods', '2', '--open-loop', '90', '--feedback', '90', '--jobs', '1',
+                    '--start', 'colliding', '--noise', 'none', '--out', str(out)]) == 0
+    text = capsys.readouterr().out
+    assert '| open loop 90 deg | 1 |' in text and '| feedback 90 deg | 1 |' in text and 'log-rank' in text
+    for name in ('p6_trials.csv', 'p6_summary.csv', 'p6_survival.png', 'p6_r_traces.png'):
+        assert (out / name).stat().st_size > 0
+
+
+def test_p6_refuses_an_unknown_start_or_noise(capsys: pytest.CaptureFixture[str]) -> None:
+    for flag, value in (('--start', 'nowhere'), ('--noise', 'loud')):
+        with pytest.raises(SystemExit) as exc:
+            p6.main([flag, value])
+        assert exc.value.code == 2 and value in capsys.readouterr().err
+    with pytest.raises(ValueError, match='start must be one of'):
+        p6.run_p6([p6.Condition(90.0, False)], [0], 1.0, start='nowhere')
+
+
+def test_c2_collisions_records_the_colliding_start(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / 'c2'
+    assert c2_collisions.main(['--start', 'colliding', '--noise', 'none', '--periods', '1', '--out', str(out)]) == 0
+    assert 'compression' in capsys.readouterr().out
+    for name in ('c2_steps.npz', 'c2_events.csv', 'c2_events.png'):
+        assert (out / name).stat().st_size > 0
+
+
+def test_c2_harvest_says_when_nothing_was_harvested(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert c2_harvest.main(['--seeds', '5000', '--periods', '2', '--jobs', '1', '--out', str(tmp_path)]) == 1
+    assert 'no C2 samples' in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:
+        c2_harvest.main(['--seeds', '9-3'])
+    assert exc.value.code == 2
