@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from smarticle_common.facts import R_BIND_BL
 
 #: Periods skipped at the start of each glider (it settles onto its limit cycle first).
 SETTLE_PERIODS = 5
@@ -61,7 +62,7 @@ def harvest_trial(seed: int, periods: float = 150.0, preset: str = 'feedback', a
     gait = GaitConfig.from_degrees(alpha_max_deg, servo_speed=config.robot.servo_speed)
     scene = dense_scene(config.robot, gait, n=robots, seed=seed)
     rec = run_trial(config, scene, periods, sample_every=sample_every, record_contacts=False)
-    cfg = GliderConfig(period=gait.period, r_bind=1.6 * bl, min_periods=min_periods, body_length=bl, width=bl)
+    cfg = GliderConfig(period=gait.period, r_bind=R_BIND_BL * bl, min_periods=min_periods, body_length=bl, width=bl)
     analysis = analyse_gliders(rec.time, rec.poses, cfg, t0=0.0)
     samples: list[C2Sample] = []
     for g in analysis.gliders:
