@@ -31,15 +31,13 @@ def record_pair(seed: int = 0, periods: float = 40.0, alpha_max_deg: float = 90.
 
     ``noise``: a ``NoiseConfig`` (None: off), its draws from ``seed`` unless it names its own, as in P6.
     """
-    from dataclasses import replace
-
     from smarticle_common.pairs import pair_coordinates
     from smarticle_sim.runner import Runner
     from smarticle_sim.settings import SimConfig
 
     config = SimConfig.from_preset(preset)
-    if noise is not None and noise.enabled:
-        config = config.with_noise(noise if noise.seed is not None else replace(noise, seed=seed))
+    if noise is not None:
+        config = config.with_noise(noise)   # the pair scene carries the trial seed its draws take
     gait = GaitConfig.from_degrees(alpha_max_deg, servo_speed=config.robot.servo_speed)
     scene, _ = c2_scene(config, gait, seed, base)
     times: list[float] = []

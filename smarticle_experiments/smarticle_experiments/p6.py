@@ -22,16 +22,13 @@ from collections.abc import Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from smarticle_common.facts import GAIT_PERIOD, R_BIND_BL
 from smarticle_common.gait import GaitConfig
 
 from smarticle_feedback.controller import FeedbackConfig, ImpactController
-
-if TYPE_CHECKING:
-    from smarticle_sim.runner import Runner
 
 #: The C2 start of the feedback robot (r in BL, theta, phi in deg, phases): where its C2 gliders live.
 #: ``smarticle-c2-harvest --seeds 5000-5039 --periods 150`` ran 40 dense open-loop trials of 7 feedback
@@ -48,6 +45,10 @@ COLLIDING_START = (1.3, 0.0, 350.0, (0.0, 0.25))
 STARTS = {'harvested': C2_START, 'colliding': COLLIDING_START}
 #: Seeded jitter of the start (r in BL, theta and phi in deg).
 C2_JITTER = (0.04, 4.0, 4.0)
+#: Draws of the jittered start before giving up when they overlap (robots' arms at the start phases).
+START_ATTEMPTS = 20
+
+
 def p6_noise(name: str = 'paper') -> Any:
     """``NoiseConfig`` of a ``--noise`` name: 'paper' (every source at its cited default; the draws take the
     trial seed) or 'none' (None). The paper's robots start in phase and drift apart in phase; without
@@ -59,10 +60,6 @@ def p6_noise(name: str = 'paper') -> Any:
     if name == 'none':
         return None
     raise ValueError(f"noise must be 'paper' or 'none', got {name!r}")
-
-
-#: Draws of the jittered start before giving up when they overlap (robots' arms at the start phases).
-START_ATTEMPTS = 20
 
 
 @dataclass(frozen=True)
@@ -100,25 +97,6 @@ class PairTrial:
     contact_periods: list[int] = field(default_factory=list)
 
 
-class ContactPeriods:
-    """A controller that only watches: the gait periods in which robots 0 and 1 touch at any physics step."""
-
-    def __init__(self, period: float, start_time: float = 0.0) -> None:
-        self.period, self.start_time = period, start_time
-        self.periods: set[int] = set()
-        self._attached = False
-
-    def _on_step(self, runner: Runner) -> None:
-        if runner.physics.link_contacts(0, 1).any():
-            self.periods.add(math.floor((runner.time - self.start_time) / self.period))
-
-    def before_tick(self, runner: Runner) -> None:
-        """Attach the step hook at the first tick."""
-        if not self._attached:
-            runner.step_hooks.append(self._on_step)
-            self._attached = True
-
-
 def c2_start(seed: int, base: tuple[float, float, float, tuple[float, float]] = C2_START,
              jitter: tuple[float, float, float] = C2_JITTER, attempt: int = 0) -> tuple[float, float, float]:
     """The seed's start (r BL, theta deg, phi deg): ``base`` plus uniform jitter (seed 0 = ``base``).
@@ -144,7 +122,8 @@ def c2_scene(config: Any, gait: GaitConfig, seed: int,
     for attempt in range(START_ATTEMPTS):
         r, theta, phi = c2_start(seed, base, attempt=attempt)
         try:
-            scene = pair_scene(config.robot, gait, r, math.radians(theta), math.radians(phi), phases=base[3])
+            scene = pair_scene(config.robot, gait, r, math.radians(theta), math.radians(phi), phases=base[3],
+                               seed=seed)
         except SceneError:
             continue
         return scene, (r, theta, phi)
@@ -180,7 +159,7 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
     """
     from smarticle_sim.batch import run_trial
     from smarticle_sim.physics import Physics
-    from smarticle_sim.runner import Controller, FeedbackController, GaitController
+    from smarticle_sim.runner import ContactPeriods, Controller, FeedbackController, GaitController
     from smarticle_sim.settings import SimConfig
     from smarticle_common.pairs import pair_coordinates
 
@@ -188,13 +167,14 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
     config = SimConfig.from_preset(preset)
     if robot_changes:
         config = replace(config, robot=replace(config.robot, **dict(robot_changes)))  # type: ignore[arg-type]
-    if noise is not None and noise.enabled:
-        config = config.with_noise(noise if noise.seed is not None else replace(noise, seed=seed))
+    if noise is not None:
+        config = config.with_noise(noise)   # the pair scene carries the trial seed its draws take
     gait = GaitConfig.from_degrees(condition.alpha_max_deg, servo_speed=config.robot.servo_speed)
     scene, (r, theta, phi) = c2_scene(config, gait, seed, base)
     feedback_controllers: list[FeedbackController] = []
 
-    counter = ContactPeriods(gait.period, start_time) if count_contacts else None
+    # every manifold point between the two robots counts, as the contact tables of docs/feedback.md were made
+    counter = ContactPeriods(gait.period, start_time, max_distance=math.inf) if count_contacts else None
 
     def add_feedback(_: Physics, gaits: GaitController) -> Sequence[Controller]:
         extra: list[Controller] = [counter] if counter is not None else []
@@ -212,7 +192,7 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
     trial = PairTrial(condition, seed, recording.time, np.empty(0), np.empty(0), start=(r, theta, phi),
                       trouble=recording.trouble)
     if counter is not None:
-        trial.contact_periods = sorted(counter.periods)
+        trial.contact_periods = sorted(counter.periods.get((0, 1), set()))
     if feedback_controllers:
         trial.halts = list(feedback_controllers[0].halts)
         trial.samples = list(feedback_controllers[0].samples or [])

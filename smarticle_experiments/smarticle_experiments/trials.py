@@ -185,7 +185,7 @@ def pair_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
     start = {'r0_bl': r, 'theta0_deg': theta, 'phi0_deg': phi}
     try:
         scene = pair_scene(config.robot, gait, r, math.radians(theta), math.radians(phi),
-                           (0.0, float(p['phase2'])))
+                           (0.0, float(p['phase2'])), seed=seed)
     except SceneError as exc:
         return {**start, 'admissible': False, 'why': str(exc), 'trouble': '', 'gliders': []}
     rec = run_trial(config, scene, float(p['periods']), sample_every=int(p['sample_every']), record_contacts=True)
@@ -254,7 +254,7 @@ def accuracy_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
     config = make_config(str(p['preset']), physics, dict(p.get('robot') or {}), dict(p.get('noise') or {}))
     gait = make_gait(config, p['alpha_max_deg'], p['servo_speed'])
     scene = pair_scene(config.robot, gait, float(p['r_bl']), math.radians(p['theta_deg']), math.radians(p['phi_deg']),
-                       (0.0, float(p['phase2'])))
+                       (0.0, float(p['phase2'])), seed=seed)
     every = max(1, round(0.05 / config.physics.control_tick))
     start = time.perf_counter()
     rec = run_trial(config, scene, float(p['periods']), sample_every=every)

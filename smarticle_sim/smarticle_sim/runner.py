@@ -344,22 +344,21 @@ class FeedbackController:
                 self.halts.append((now, k, decision.face or ''))
 
 
-
 class ContactPeriods:
     """A controller that only watches: for every pair of robots, the gait periods in which they touched at
     any physics step (``periods[(i, j)]``, i < j; periods counted from ``start_time``).
 
-    Touching is ``Physics.touching`` (contact points at zero or negative distance, not the points Bullet
-    keeps within its contact margin).
+    Touching is ``Physics.touching(max_distance)``: by default contact points at zero or negative distance,
+    not the points Bullet keeps within its contact margin (``math.inf`` counts those too).
     """
 
-    def __init__(self, period: float, start_time: float = 0.0) -> None:
-        self.period, self.start_time = period, start_time
+    def __init__(self, period: float, start_time: float = 0.0, max_distance: float = 0.0) -> None:
+        self.period, self.start_time, self.max_distance = period, start_time, max_distance
         self.periods: dict[tuple[int, int], set[int]] = {}
         self._attached = False
 
     def _on_step(self, runner: Runner) -> None:
-        pairs = runner.physics.touching()
+        pairs = runner.physics.touching(self.max_distance)
         if pairs:
             q = math.floor((runner.time - self.start_time) / self.period)
             for key in pairs:

@@ -86,3 +86,11 @@ def test_contact_fractions_count_the_glider_span_only() -> None:
     gliders = [{'i': 2, 'j': 0, 'start_period': 10, 'lifetime_periods': 4}]
     add_contact_fractions(gliders, {(0, 2): {9, 10, 12, 14}})
     assert gliders[0]['contact_fraction'] == 0.5                         # periods 10 and 12 of 10-13
+
+
+def test_a_pair_trials_noise_follows_its_seed() -> None:
+    """The pair scene carries the trial seed, so two seeds of the same (unjittered) start draw different noise."""
+    p = {**params('pair', periods=3.0, min_periods=1), 'noise': {'clock_rate_sd': 0.01}}
+    one, other = KINDS['pair'].function(p, 1), KINDS['pair'].function(p, 2)
+    assert one['trajectory_bl'][0] == other['trajectory_bl'][0]       # the same start
+    assert one['trajectory_bl'] != other['trajectory_bl']             # different clocks
