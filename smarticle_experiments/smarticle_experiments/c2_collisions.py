@@ -32,6 +32,7 @@ def record_pair(seed: int = 0, periods: float = 40.0, alpha_max_deg: float = 90.
     ``noise``: a ``NoiseConfig`` (None: off), its draws from ``seed`` unless it names its own, as in P6.
     """
     from smarticle_common.pairs import pair_coordinates
+    from smarticle_sim.physics import FsrReading
     from smarticle_sim.runner import Runner
     from smarticle_sim.settings import SimConfig
 
@@ -45,10 +46,14 @@ def record_pair(seed: int = 0, periods: float = 40.0, alpha_max_deg: float = 90.
     links: list[np.ndarray] = []
     poses: list[np.ndarray] = []
 
+    reading: list[FsrReading] = []
+
     def on_step(run: Runner) -> None:
         ph = run.physics
+        if not reading:
+            reading.append(FsrReading(ph))
         times.append(ph.time)
-        fsr.append(ph.fsr())
+        fsr.append(reading[0].step())   # what the feedback policy's FSR sample is made of
         links.append(ph.link_contacts(0, 1))
         poses.append(ph.poses().copy())
 

@@ -28,7 +28,7 @@ from .camera import BACKENDS, CameraConfig, OverheadCamera
 from .errors import ConfigError
 from .scenes import SCENE_KINDS, Scene, build_scene
 from .settings import FRICTION_LENGTH, NoiseConfig, PhysicsConfig, SimConfig
-from .physics import Physics
+from .physics import FsrReading, Physics
 from .runner import Runner
 
 NODE_NAME = 'sim_bridge'
@@ -204,9 +204,12 @@ class SimBridgeCore:
         self._next_frame_ns = 0
         self._fsr_watch: list[int] = []
         self._fsr_peak: np.ndarray | None = None
+        self._fsr_reading: FsrReading | None = None
 
     def _fsr_step(self, _: Runner) -> None:
-        forces = self.physics.fsr(self._fsr_watch)
+        if self._fsr_reading is None:
+            self._fsr_reading = FsrReading(self.physics, self._fsr_watch)
+        forces = self._fsr_reading.step()
         self._fsr_peak = forces if self._fsr_peak is None else np.maximum(self._fsr_peak, forces)
 
     def fsr_sample(self, robots: list[int]) -> np.ndarray:
@@ -220,8 +223,10 @@ class SimBridgeCore:
         now = self.physics.fsr(robots)
         if self._fsr_peak is not None:
             for row, k in enumerate(robots):
-                if k in self._fsr_watch:
-                    now[row] = np.maximum(now[row], self._fsr_peak[self._fsr_watch.index(k)])
+                if k in self._fsr_watch:   # the peak of the readings, which include this instant's step
+                    now[row] = self._fsr_peak[self._fsr_watch.index(k)]
+        if list(robots) != self._fsr_watch:
+            self._fsr_reading = None   # a new set of robots: a new reading (its average starts from zero)
         self._fsr_watch = list(robots)
         self._fsr_peak = None
         hooked = self._fsr_step in self.runner.step_hooks

@@ -446,6 +446,30 @@ class Physics:
         self.close()
 
 
+class FsrReading:
+    """The sim's FSR reading of some robots, step by step: each face's force averaged over the physics steps
+    of ``PhysicsConfig.fsr_window`` (``fsr_steps``), so an impulsive kick reads the same at every time step.
+
+    Call ``step()`` once after every physics step; with ``fsr_steps`` = 1 it is ``Physics.fsr`` itself.
+    """
+
+    def __init__(self, physics: Physics, robots: Sequence[int] | None = None) -> None:
+        self.physics = physics
+        self.robots = physics.robot_list(robots)
+        self.steps = physics.config.physics.fsr_steps
+        self._history = np.zeros((self.steps, len(self.robots), len(FSR_FACES)))
+        self._next = 0
+
+    def step(self) -> np.ndarray:
+        """(len(robots), 4) reading after the step just taken: the mean force of the last ``steps`` steps."""
+        forces = self.physics.fsr(self.robots)
+        if self.steps == 1:
+            return forces
+        self._history[self._next] = forces
+        self._next = (self._next + 1) % self.steps
+        return self._history.sum(axis=0) / self.steps
+
+
 def _quiet_client() -> BulletClient:
     """A DIRECT BulletClient, with the engine's start-up chatter on stdout ('argv[0]=') silenced."""
     try:

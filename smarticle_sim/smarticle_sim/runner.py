@@ -27,7 +27,7 @@ from smarticle_common.gait import GaitConfig, SquareGait, TIME_EPS, board_time
 
 from .errors import ConfigError
 from .noise import ServoDelays, clock_rates
-from .physics import Physics
+from .physics import FsrReading, Physics
 from .scenes import Scene
 from .settings import SimConfig
 
@@ -302,7 +302,8 @@ class FeedbackController:
     is on, so its gait periods are the gait's.
 
     With ``peak_hold`` (the default) a tick's FSR sample is the largest force of each face over the physics
-    steps since the previous sample (a step hook on the runner), not the force at the tick's instant:
+    steps since the previous sample (a step hook on the runner; each step's reading is the force averaged
+    over ``PhysicsConfig.fsr_window``, ``physics.FsrReading``), not the force at the tick's instant:
     robot-robot collisions are kicks of a few milliseconds, shorter than a 1/60 s control tick, and an
     instantaneous read would see most of them as zero. A real FSR read through a divider and the servo
     board's ADC sees a kick stretched by the sensor's elastomer and the analogue input's filter; the peak
@@ -317,12 +318,15 @@ class FeedbackController:
         self.halts: list[tuple[float, int, str]] = []
         self.peak_hold = peak_hold
         self._peak: np.ndarray | None = None
+        self._reading: FsrReading | None = None
         self._attached = False
         #: With ``record``: every sample given to the policies, as (time, forces (robots, 4)).
         self.samples: list[tuple[float, np.ndarray]] | None = [] if record else None
 
     def _on_step(self, runner: Runner) -> None:
-        forces = self.gaits.physics.fsr(self._robots)
+        if self._reading is None:
+            self._reading = FsrReading(self.gaits.physics, self._robots)
+        forces = self._reading.step()
         self._peak = forces if self._peak is None else np.maximum(self._peak, forces)
 
     def before_tick(self, runner: Runner) -> None:

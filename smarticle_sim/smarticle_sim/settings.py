@@ -82,8 +82,14 @@ class PhysicsConfig:
     #: 0.85, jammed robots bounce between two contacts and roll over otherwise (study, C). 1 = the box's own.
     tilt_inertia_scale: float = 100.0
 
+    #: The sim's FSR reading is each face's contact force averaged over this time (s; a whole number of
+    #: steps, at least one), so a collision kick reads its impulse / fsr_window at every time step instead
+    #: of impulse / time_step. 1/480 s: a kick is one physics step there, and the feedback windows were
+    #: first calibrated at that step (docs/feedback.md, "FSR sample in the sim").
+    fsr_window: float = 1.0 / 480.0
+
     def __post_init__(self) -> None:
-        require_positive(self, 'time_step', 'control_tick', 'plate_size', 'plate_thickness', 'max_tilt',
+        require_positive(self, 'time_step', 'control_tick', 'fsr_window', 'plate_size', 'plate_thickness', 'max_tilt',
                   'max_speed', 'max_penetration', 'position_gain', 'contact_breaking_threshold', 'contact_erp',
                          error=ConfigError)
         require_non_negative(self, 'gravity', 'friction_body_plate', 'friction_robot_robot', 'restitution',
@@ -121,6 +127,11 @@ class PhysicsConfig:
     def steps_per_tick(self) -> int:
         """Physics steps in one control tick."""
         return steps_per_tick(self.control_tick, self.time_step)
+
+    @property
+    def fsr_steps(self) -> int:
+        """Physics steps the FSR reading averages over (``fsr_window`` / ``time_step``, rounded, at least 1)."""
+        return max(1, round(self.fsr_window / self.time_step))
 
     def servo_gain(self) -> float:
         """The servo loop's position gain per step given to Bullet (see ``servo_bandwidth``)."""

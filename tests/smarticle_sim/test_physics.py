@@ -11,12 +11,12 @@ import pytest
 from smarticle_common.gait import GaitConfig
 from smarticle_common.topics import FSR_FACES
 
-from smarticle_sim.errors import SceneError, SimError, SimTrouble
+from smarticle_sim.errors import ConfigError, SceneError, SimError, SimTrouble
 from smarticle_sim.scenes import RobotPlacement, Scene, dense_scene
 from smarticle_common.facts import SMALL
 from smarticle_sim.settings import SimConfig
 from smarticle_sim.trouble import check_state
-from smarticle_sim.physics import ARM_JOINTS, Physics
+from smarticle_sim.physics import ARM_JOINTS, FsrReading, Physics
 from smarticle_sim.runner import Runner
 
 def lone_robot(heading: float = math.pi / 2, alpha1: float = 0.0, alpha2: float = 0.0,
@@ -139,6 +139,34 @@ def test_fsr_push_shows_on_one_face_only(config: SimConfig, arm: int, side: int)
         assert forces[face] > 0.5, dict(zip(FSR_FACES, forces, strict=True))
         assert np.delete(forces, face) == pytest.approx(0.0, abs=1e-9)
         assert world.fsr([]).shape == (0, 4)
+
+
+@pytest.mark.parametrize('dt_inv, window_steps', [(480, 1), (960, 2), (1920, 4)])
+def test_fsr_reading_averages_over_the_fsr_window(gait90: GaitConfig, dt_inv: int, window_steps: int) -> None:
+    """The FSR reading is the force of the last fsr_window (1/480 s) of steps, whatever the time step."""
+    config = SimConfig().with_physics(time_step=1.0 / dt_inv)
+    assert config.physics.fsr_steps == window_steps
+    with Runner.with_gaits(config, dense_scene(config.robot, gait90, 7, seed=1)) as run:
+        world = run.physics
+        reading = FsrReading(world, [0, 1, 2])
+        raw: list[np.ndarray] = []
+        compared = loaded = 0
+
+        def on_step(_: Runner) -> None:
+            nonlocal compared, loaded
+            got = reading.step()
+            raw.append(world.fsr([0, 1, 2]))
+            if len(raw) >= window_steps:
+                assert got == pytest.approx(np.mean(raw[-window_steps:], axis=0), abs=1e-12)
+                compared += 1
+                loaded += bool(got.any())
+
+        run.step_hooks.append(on_step)
+        run.gaits.start(0.0)
+        run.run(world.ticks_for(1.6))
+        assert compared > 100 and loaded > 0   # the robots collided, so the readings were not all zero
+    with pytest.raises(ConfigError, match='fsr_window'):
+        SimConfig().with_physics(fsr_window=0.0)
 
 
 def test_robot_contacts_and_penetration(config: SimConfig, gait90: GaitConfig) -> None:
