@@ -15,6 +15,7 @@ import rclpy
 from rclpy.node import Node
 from rclpy.time import Time
 from smarticle_common import topics
+from smarticle_common.gait import board_time
 from smarticle_common.node import (OK, WARN, DiagnosticsPublisher, accept_runtime_changes, read_config,
                                    resolve_robot_id, run_node)
 from smarticle_common.params import ParameterError
@@ -39,6 +40,7 @@ class FeedbackNode(Node):
         self.robot_id = resolve_robot_id(self, values['robot_id'])
         self.controller = ImpactController(config)
         self.start_at: float = values['start_at']
+        self.clock_rate = 1.0 + values['clock_rate_offset']
         if self.start_at >= 0.0:
             self.controller.start(self.start_at)
         self.bad: dict[str, int] = {}
@@ -93,8 +95,10 @@ class FeedbackNode(Node):
             sample = check_sample(list(msg.name), list(msg.effort))
             for warning in sample.warnings:
                 self.report('bad_values', warning)
-            decision = self.controller.update(Time.from_msg(msg.header.stamp).nanoseconds * 1e-9,
-                                              sample.forces)
+            # the robot's board clock, as its gait node reads it (with clock_rate_offset: its own periods)
+            t = board_time(Time.from_msg(msg.header.stamp).nanoseconds * 1e-9, self.controller.start_time,
+                           self.clock_rate)
+            decision = self.controller.update(t, sample.forces)
             if decision.halt:
                 halt = self.Header()
                 halt.stamp = msg.header.stamp

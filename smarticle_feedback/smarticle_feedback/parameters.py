@@ -57,6 +57,9 @@ PARAMS: tuple[ParamSpec, ...] = (
               'per period', 0.05, 60.0),
     ParamSpec('phase', 0.0, "gait phase of this robot (fraction of a period): use the gait node's phase",
               0.0, 0.999999),
+    ParamSpec('clock_rate_offset', 0.0, "relative error of this robot's board clock: use the gait node's "
+              'clock_rate_offset, so that both read gait periods on the same clock (0 on a real board)',
+              -0.05, 0.05),
     ParamSpec('diagnostics_period', 1.0, 'seconds (wall) between /diagnostics messages', 0.05, 60.0),
     ParamSpec('start_at', -1.0, "the gait's start time (s): use the gait node's start_at; negative = take "
               'it from /smarticles/start', -1.0, 1e7),

@@ -18,7 +18,8 @@ from smarticle_common.gait import GaitConfig
 from smarticle_experiments.p6 import COLLIDING_START, c2_scene, default_feedback_config
 from smarticle_feedback.controller import ImpactController
 from smarticle_sim.bridge import BridgeSettings
-from smarticle_sim.runner import FeedbackController, Runner
+from smarticle_sim.physics import Physics
+from smarticle_sim.runner import FeedbackController, GaitController, Runner
 from smarticle_sim.settings import SimConfig
 
 from tests.helpers.ros import spin_until
@@ -42,11 +43,18 @@ def _start() -> tuple[SimConfig, dict[str, Any]]:
                     'start_at': START_AT}
 
 
-def _batch(config: SimConfig, params: dict[str, Any], ticks: int) -> tuple[dict[int, np.ndarray], list[tuple]]:
-    """Poses by stamp (ns) and halts (stamp ns, robot, face) of the batch path over ``ticks`` ticks."""
+def _batch(config: SimConfig, params: dict[str, Any], ticks: int,
+           clock_offsets: tuple[float, float] = (0.0, 0.0)) -> tuple[dict[int, np.ndarray], list[tuple]]:
+    """Poses by stamp (ns) and halts (stamp ns, robot, face) of the batch path over ``ticks`` ticks.
+
+    ``clock_offsets``: each robot's gait clock rate - 1 (the noise model's clock-rate draws, given here).
+    """
     settings = BridgeSettings.defaults(**params)
-    runner = Runner.with_gaits(settings.sim, settings.scene())
-    assert runner.gaits is not None
+    scene = settings.scene()
+    physics = Physics(settings.sim, scene)
+    gaits = GaitController(physics, [r.gait for r in scene.robots], clock_rates=clock_offsets)
+    runner = Runner(physics, [gaits])
+    runner.gaits = gaits
     runner.gaits.start(START_AT)
     feedback = default_feedback_config()
     policies = {k: ImpactController(replace(feedback, period=settings.gait.period, phase=p))
@@ -66,7 +74,7 @@ def _batch(config: SimConfig, params: dict[str, Any], ticks: int) -> tuple[dict[
 
 
 def _ros(nodes: Any, probe: Any, params: dict[str, Any], config: SimConfig, duration: float,
-         listeners: int) -> tuple[dict[int, np.ndarray], list[tuple]]:
+         listeners: int, clock_offsets: tuple[float, float] = (0.0, 0.0)) -> tuple[dict[int, np.ndarray], list[tuple]]:
     """Poses by stamp (ns) and halts (stamp ns, robot, face) of the lock-step ROS path."""
     from geometry_msgs.msg import PoseArray
     from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -89,9 +97,10 @@ def _ros(nodes: Any, probe: Any, params: dict[str, Any], config: SimConfig, dura
         nodes.start('gait', '--ros-args', '-r', f'__node:=gait_{k}', '-p', f'robot_id:={k}',
                     '-p', 'lockstep:=true', '-p', 'wait_for_feedback:=true', '-p', 'alpha_max_deg:=90.0',
                     '-p', f'servo_speed:={config.robot.servo_speed}', '-p', f'phase:={phases[k]}',
-                    '-p', f'start_at:={START_AT}')
+                    '-p', f'start_at:={START_AT}', '-p', f'clock_rate_offset:={clock_offsets[k]!r}')
         nodes.start('feedback', '--ros-args', '-r', f'__node:=feedback_{k}', '-p', f'robot_id:={k}',
-                    '-p', 'lockstep:=true', '-p', f'phase:={phases[k]}', '-p', f'start_at:={START_AT}')
+                    '-p', 'lockstep:=true', '-p', f'phase:={phases[k]}', '-p', f'start_at:={START_AT}',
+                    '-p', f'clock_rate_offset:={clock_offsets[k]!r}')
     # the halts are seen only once both feedback nodes' publishers have matched the probe
     assert spin_until(probe, lambda: all(sub.get_publisher_count() > 0 for sub in subs[1:]), 30.0)
     args = [a for name, value in {**params, 'duration': duration, 'wait_for_subscribers': listeners}.items()
@@ -106,14 +115,29 @@ def _ros(nodes: Any, probe: Any, params: dict[str, Any], config: SimConfig, dura
     return poses, sorted(halts)
 
 
-def test_lockstep_feedback_is_deterministic_and_equals_the_batch_path(nodes: Any, ros_node: Any) -> None:
+#: Clock-rate offsets of the two robots' boards for the noisy case: about 1.5 and 1 sd of the cited
+#: resonator spread (settings.CLOCK_RATE_SD, 0.29 %), apart by 0.7 %.
+CLOCK_OFFSETS = (0.0043, -0.0029)
+
+
+@pytest.mark.parametrize('clock_offsets, repeats', [((0.0, 0.0), 2), (CLOCK_OFFSETS, 1)],
+                         ids=['same-clocks', 'clock-noise'])
+def test_lockstep_feedback_is_deterministic_and_equals_the_batch_path(nodes: Any, ros_node: Any,
+                                                                      clock_offsets: tuple[float, float],
+                                                                      repeats: int) -> None:
+    """Two runs agree bit for bit with the batch path; with clock-rate noise the gait and feedback nodes
+    take each robot's offset (clock_rate_offset) as the batch path's gait controller does."""
     config, params = _start()
     duration = START_AT + PERIODS * 1.6
     ticks = round(duration / config.physics.control_tick)
-    batch, batch_halts = _batch(config, params, ticks)
+    batch, batch_halts = _batch(config, params, ticks, clock_offsets)
     assert batch_halts, 'the C2 start must produce a halt in the batch path (else the test shows nothing)'
+    if clock_offsets != (0.0, 0.0):
+        same_clocks = _batch(config, params, ticks)[0]
+        stamp = max(batch)
+        assert not np.array_equal(batch[stamp], same_clocks[stamp]), 'the clock offsets must change the run'
     probe = ros_node('feedback_lockstep_probe')
-    runs = [_ros(nodes, probe, params, config, duration, listeners=1) for _ in range(2)]
+    runs = [_ros(nodes, probe, params, config, duration, 1, clock_offsets) for _ in range(repeats)]
     for poses, halts in runs:
         assert halts == batch_halts
         common = sorted(set(poses) & set(batch))
