@@ -27,17 +27,19 @@ class PhysicsConfig:
 
     The defaults are the converged, stable model of docs/sim_calibration.md: the paper authors' contact
     values (friction 0.3 on every pair, restitution 0.85 between robots and none on the plate), a servo
-    of fixed bandwidth, robots that stay flat, at the knee of run time against error (1/480 s). Each
-    value that departs from a measured or published one says why below, with the figure behind it.
+    of fixed bandwidth, robots that stay flat, at the knee of run time against error (1/960 s, 5 solver
+    iterations). Each value that departs from a measured or published one says why below, with the figure
+    behind it.
     """
 
-    #: 1/480 s: the knee of run time against error. Drift 4 % and pair r 1-3 % from their time-step limits,
-    #: overlaps 0.8 mm; 1/240 s is 11 % off and lets an arm tip (0.5 m/s) travel 2.2 mm of a 3 mm arm per
-    #: step (docs/physics_study.md section B, docs/sim_calibration.md).
-    time_step: float = 1.0 / 480.0
+    #: 1/960 s: the coarsest step at which the dense statistics converge. The C1 share of P1's gliders is
+    #: 45-49 % at 1/480 s, 24-30 % at 1/960 s and 27-30 % at 1/1920 s on the same seeds; the single-robot
+    #: drift is within 10 % of its limit from 1/480 s on (docs/sim_calibration.md, Convergence).
+    time_step: float = 1.0 / 960.0
     control_tick: float = 1.0 / 60.0            # must be a whole number of time steps
-    #: 10: the drift is within 5 % of 50 iterations; 20 / 50 cost 1.6x / 1.9x in dense runs (study, B).
-    solver_iterations: int = 10
+    #: 5 at 1/960 s: the P1 figures agree with 10 iterations and with 1/1920 s on the same seeds, the drift
+    #: is 4.7 % off its limit, and a P1 trial is 1.15x faster than with 10 (docs/sim_calibration.md, Speed).
+    solver_iterations: int = 5
     contact_breaking_threshold: float = 0.002   # m; Bullet's default 0.02 is far larger than the robots' gaps
     gravity: float = 9.81
     friction_body_plate: float = 0.30           # the authors' Chrono model (0.3-0.37)
@@ -75,7 +77,7 @@ class PhysicsConfig:
     #: None: the same as ``restitution``.
     restitution_body_plate: float | None = 0.0
     #: Bullet's continuous collision detection: swept-sphere radius (m) on every robot link; 0 = off (no
-    #: tunnelling at 1/480 s: overlaps <= 1.3 mm in 7-robot runs, so it is not needed).
+    #: tunnelling at 1/480 s or finer: overlaps <= 1.3 mm in 7-robot runs, so it is not needed).
     ccd_swept_sphere_radius: float = 0.0
     #: Factor on the body's roll and pitch inertia (mass, yaw inertia and contacts unchanged): robots that
     #: stay flat on the plate, as the real ones do (the paper never mentions one tipping). With restitution

@@ -37,8 +37,8 @@ def test_a_parallel_quadrant_2_start_is_kicked_out_of_reach(config: SimConfig, g
 
 
 def test_a_lone_robot_drifts_as_the_converged_model_says(config: SimConfig, gait90: GaitConfig) -> None:
-    # P7 at the default: 147 um per cycle at 1/480 s, 145 / 154 um at 1/960 / 1/1920 s (converged within
-    # 5 %); the paper's robots drift 40-150 um. The band catches a change of servo or contact model.
+    # P7 at the default: 152 um per cycle at 1/960 s with 5 iterations, 159 um at 1/1920 s (the limit with 10
+    # iterations: 159 um); the paper's robots drift 40-150 um. The band catches a change of servo or contact model.
     scene = Scene((RobotPlacement(0.0, 0.0, math.pi / 2, gait90.alpha_max, gait90.alpha_max, gait90),),
                   name='single')
     rec = run_trial(config, scene, 12, sample_every=1)

@@ -22,7 +22,7 @@ def test_bad_physics_values_refused(field: str, value: float) -> None:
 
 
 def test_control_tick_must_be_whole_steps() -> None:
-    assert PhysicsConfig().steps_per_tick == 8
+    assert PhysicsConfig().steps_per_tick == 16
     assert steps_per_tick(0.01, 0.001) == 10
     with pytest.raises(ValueError, match='control_tick'):
         PhysicsConfig(time_step=1 / 240, control_tick=0.01)

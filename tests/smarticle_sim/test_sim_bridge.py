@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -71,9 +72,14 @@ def test_core_barrier_waits_for_every_robot_and_drops_bad_commands() -> None:
 
 
 def test_fsr_samples_hold_the_peak_of_each_publish_period() -> None:
-    """The bridge's FSR sample is the peak since the last one (as in the batch feedback path), not the instant."""
+    """The bridge's FSR sample is the peak since the last one (as in the batch feedback path), not the instant.
+
+    With the FSR window set to one step each step's reading is that step's force, so the held peak is never
+    below the instant's force (the averaging over a longer window is tested in test_physics.py).
+    """
     settings = BridgeSettings.defaults(scene='pair', preset='feedback', pair_r=1.3, pair_theta_deg=0.0,
                                        pair_phi_deg=350.0, pair_phase_1=0.25, publish_period=1.0 / 60.0)
+    settings = replace(settings, sim=settings.sim.with_physics(fsr_window=settings.sim.physics.time_step))
     core = SimBridgeCore(settings)
     gaits = [SquareGait(GaitConfig.from_degrees(90.0, phase=p)) for p in (0.0, 0.25)]
     for gait in gaits:
