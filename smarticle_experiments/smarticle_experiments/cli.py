@@ -15,11 +15,13 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 from typing import NoReturn
 
 import yaml
+from smarticle_sim.settings import NotConvergedWarning
 
 from .errors import ExperimentError, SchedulerError, SpecError
 from .spec import ExperimentSpec, builtin_names, load_spec
@@ -103,12 +105,19 @@ def summary_name(spec: ExperimentSpec) -> str:
 
 def cmd_list(args: argparse.Namespace) -> int:
     """Print the shipped specs (and with -v the kinds)."""
-    for name in builtin_names():
+    names = builtin_names()
+    width = max(len(name) for name in names)
+    for name in names:
         try:
-            spec = load_spec(name)
-            print(f'{name:12s} {spec.kind:9s} {len(spec.points()) * len(spec.seeds):6d} trials  {spec.description}')
+            with warnings.catch_warnings(record=True) as caught:   # noted on the spec's line, not as a traceback
+                warnings.simplefilter('always', NotConvergedWarning)
+                spec = load_spec(name)
+            note = '  (a grid point is coarser than converges: NotConvergedWarning)' if any(
+                issubclass(w.category, NotConvergedWarning) for w in caught) else ''
+            print(f'{name:{width}s} {spec.kind:9s} {len(spec.points()) * len(spec.seeds):6d} trials  '
+                  f'{spec.description}{note}')
         except SpecError as exc:
-            print(f'{name:12s} INVALID: {exc}')
+            print(f'{name:{width}s} INVALID: {exc}')
     if args.verbose:
         print('\ntrial kinds (parameters and defaults):')
         for kind, info in KINDS.items():
