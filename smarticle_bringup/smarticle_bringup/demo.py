@@ -41,6 +41,10 @@ def build_parser() -> argparse.ArgumentParser:
                         help='dense scene: seeded gait-phase offsets in +-this many periods, a stand-in for the '
                              "real robots' phase drift (default 0.05; 0 = perfectly in phase, where the sim's "
                              'pairs bind but hardly glide: docs/sim_calibration.md)')
+    parser.add_argument('--clock-noise', action='store_true',
+                        help="each robot's board clock runs fast or slow by a seeded draw of the cited resonator "
+                             'spread (0.29 %% sd; the clock_rate_sd of noise: paper), the same draws as the batch '
+                             'path for this seed; its gait and feedback nodes take it as clock_rate_offset')
     parser.add_argument('--feedback', action=argparse.BooleanOptionalAction, default=True,
                         help='run the tactile feedback node of every robot (impact window from '
                              'smarticle_feedback/config/feedback.yaml; default on); the sim then publishes FSR '
@@ -71,12 +75,22 @@ def report_graph(names: list[str], path: Path) -> None:
 SIM_TROUBLE_EXIT = 3
 
 
+def clock_offsets(robots: int, seed: int) -> np.ndarray:
+    """Each robot's board-clock rate offset for ``--clock-noise``: the batch path's draws (``noise.clock_rates``)
+    of the cited clock spread for the trial seed ``seed``, so a ROS run and a batch run of the seed agree."""
+    from smarticle_sim.noise import clock_rates
+    from smarticle_sim.settings import CLOCK_RATE_SD, NoiseConfig
+
+    return clock_rates(NoiseConfig(clock_rate_sd=CLOCK_RATE_SD, servo_jitter=0.0, friction_sd=0.0), robots, seed)
+
+
 def write_params(args: argparse.Namespace, path: Path) -> dict[str, Any]:
     """The run's parameter file: the shared stack.yaml with the demo's amplitude, plus per-robot phases.
 
     ``/**`` is the shipped ``config/stack.yaml`` with ``alpha_max_deg`` replaced; ``/sim_bridge`` gets the
     phase jitter and ``/smarticle_<k>/gait`` and ``/smarticle_<k>/feedback`` their robot's phase (from the
-    sim bridge's own scene, so the start shape and the gaits agree); ``/glider_monitor`` the glider length.
+    sim bridge's own scene, so the start shape and the gaits agree) and, with ``--clock-noise``, its clock
+    rate offset (``clock_offsets``); ``/glider_monitor`` the glider length.
     Returns the shared settings (period, start_at, ...).
     """
     import yaml
@@ -91,10 +105,14 @@ def write_params(args: argparse.Namespace, path: Path) -> dict[str, Any]:
     data: dict[str, Any] = {'/**': {'ros__parameters': shared},
                             '/sim_bridge': {'ros__parameters': {'phase_jitter': float(args.phase_jitter)}},
                             '/glider_monitor': {'ros__parameters': {'min_periods': args.min_periods}}}
+    offsets = clock_offsets(len(robots), args.seed) if getattr(args, 'clock_noise', False) else None
     for k, robot in enumerate(robots):
         phase = float(robot.gait.phase) if robot.gait is not None else 0.0
+        own: dict[str, Any] = {'phase': phase}
+        if offsets is not None:
+            own['clock_rate_offset'] = float(offsets[k])
         for node in ('gait', 'feedback'):
-            data[f'/smarticle_{k}/{node}'] = {'ros__parameters': {'phase': phase}}
+            data[f'/smarticle_{k}/{node}'] = {'ros__parameters': dict(own)}
     path.write_text(yaml.safe_dump(data, sort_keys=False), encoding='utf-8')
     return shared
 

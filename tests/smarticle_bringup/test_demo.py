@@ -53,3 +53,24 @@ def test_demo_without_feedback_runs_the_open_loop_gait_only(tmp_path: Path) -> N
     assert 'as separate processes' in proc.stdout
     assert not list((out / 'logs').glob('feedback-*.log')) and len(list((out / 'logs').glob('gait-*.log'))) == 2
     assert np.load(out / 'poses.npz')['poses'].shape[1:] == (2, 3)
+
+
+def test_clock_noise_gives_each_robot_the_batch_paths_clock_offset(tmp_path: Path) -> None:
+    """--clock-noise writes each robot's clock_rate_offset (gait and feedback alike): the batch path's draw."""
+    import yaml
+    from smarticle_bringup.demo import build_parser, write_params
+    from smarticle_sim.noise import clock_rates
+    from smarticle_sim.settings import NoiseConfig
+
+    path = tmp_path / 'params.yaml'
+    write_params(build_parser().parse_args(['--robots', '3', '--seed', '4', '--clock-noise']), path)
+    data = yaml.safe_load(path.read_text(encoding='utf-8'))
+    expected = clock_rates(NoiseConfig.paper(), 3, 4)
+    assert np.any(expected != 0.0)
+    for k in range(3):
+        gait, feedback = (data[f'/smarticle_{k}/{node}']['ros__parameters'] for node in ('gait', 'feedback'))
+        assert gait['clock_rate_offset'] == feedback['clock_rate_offset'] == expected[k]
+        assert gait['phase'] == feedback['phase']
+    write_params(build_parser().parse_args(['--robots', '3', '--seed', '4']), path)
+    data = yaml.safe_load(path.read_text(encoding='utf-8'))
+    assert all('clock_rate_offset' not in data[f'/smarticle_{k}/gait']['ros__parameters'] for k in range(3))
