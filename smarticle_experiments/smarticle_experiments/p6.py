@@ -216,21 +216,42 @@ def default_feedback_config() -> FeedbackConfig:
     return config_from_values(default_values())
 
 
-def _run(args: tuple[Condition, int, float, bool, str, str]) -> PairTrial:
-    condition, seed, periods, contacts, start, noise = args
-    return run_pair_trial(condition, seed, periods, count_contacts=contacts, base=STARTS[start],
+def windows_file(path: str | Path) -> FeedbackConfig:
+    """The feedback config of the shipped defaults with the impact windows of a YAML file: a ROS parameter
+    file with a ``feedback`` (or ``/**``) section, e.g. ``config/feedback.yaml``, or a flat mapping such as the
+    ``feedback parameters`` that ``smarticle-feedback-calibrate`` prints. ParameterError / ValueError name
+    the problem (an unknown or out-of-range parameter, a file without windows)."""
+    import yaml
+    from smarticle_common.params import ParameterError
+    from smarticle_feedback.parameters import config_from_values, default_values
+
+    data = yaml.safe_load(Path(path).read_text(encoding='utf-8'))
+    if isinstance(data, dict):
+        for key in ('feedback', '/feedback', '/**'):
+            if isinstance(data.get(key), dict) and 'ros__parameters' in data[key]:
+                data = data[key]['ros__parameters']
+                break
+    if not isinstance(data, dict) or not any(str(k).endswith(('_min', '_max', '_enabled')) for k in data):
+        raise ParameterError(f'{path}: no impact windows (<face>_min / _max / _enabled) in it')
+    return config_from_values(default_values(**data))
+
+
+def _run(args: tuple[Condition, int, float, bool, str, str, FeedbackConfig | None]) -> PairTrial:
+    condition, seed, periods, contacts, start, noise, feedback = args
+    return run_pair_trial(condition, seed, periods, feedback=feedback, count_contacts=contacts, base=STARTS[start],
                           noise=p6_noise(noise))
 
 
 def run_p6(conditions: Sequence[Condition], seeds: Sequence[int], periods: float, jobs: int = 2,
            progress: bool = True, contacts: bool = False, start: str = 'harvested',
-           noise: str = 'paper') -> list[PairTrial]:
+           noise: str = 'paper', feedback: FeedbackConfig | None = None) -> list[PairTrial]:
     """Every (condition, seed) trial, ``jobs`` processes in parallel (at most 2 on the shared machine), from
-    the named ``start`` (``STARTS``) with the named ``noise`` (``p6_noise``)."""
+    the named ``start`` (``STARTS``) with the named ``noise`` (``p6_noise``); the feedback conditions use
+    ``feedback`` (default: the shipped windows, ``default_feedback_config``)."""
     if start not in STARTS:
         raise ValueError(f'start must be one of {", ".join(STARTS)}, got {start!r}')
     p6_noise(noise)
-    work = [(c, s, periods, contacts, start, noise) for c in conditions for s in seeds]
+    work = [(c, s, periods, contacts, start, noise, feedback) for c in conditions for s in seeds]
     trials: list[PairTrial] = []
     with ProcessPoolExecutor(max_workers=max(1, jobs)) as pool:
         for trial in pool.map(_run, work):
@@ -428,8 +449,18 @@ def main(argv: Sequence[str] | None = None) -> int:
                              'start, robot 2 a quarter period ahead')
     parser.add_argument('--noise', choices=['paper', 'none'], default='paper',
                         help='noise with a cause: paper (the cited defaults, default) or none')
+    parser.add_argument('--windows', default=None,
+                        help='YAML file of impact windows for the feedback conditions (a parameter file such as '
+                             "config/feedback.yaml, or the 'feedback parameters' of smarticle-feedback-calibrate); "
+                             'default: the shipped windows')
     parser.add_argument('--quick', action='store_true', help='3 seeds, 30 periods, open loop 90 vs feedback 90')
     args = parser.parse_args(argv)
+    feedback = None
+    if args.windows is not None:
+        try:
+            feedback = windows_file(args.windows)
+        except (OSError, ValueError) as err:   # ParameterError is a ValueError
+            parser.error(f'--windows: {err}')
     if args.quick:
         args.seeds, args.periods, args.open_loop, args.feedback = 3, 30.0, [90.0], [90.0]
     conditions = [Condition(a, False) for a in args.open_loop] + [Condition(a, True) for a in args.feedback]
@@ -437,7 +468,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     wall = time.perf_counter()
     trials = run_p6(conditions, range(args.seeds), args.periods, min(args.jobs, 2), contacts=args.contacts,
-                    start=args.start, noise=args.noise)
+                    start=args.start, noise=args.noise, feedback=feedback)
     rows = summarize(trials, args.periods)
     with (out / 'p6_trials.csv').open('w', newline='') as handle:
         writer = csv.writer(handle)

@@ -42,3 +42,27 @@ def test_c2_harvest_says_when_nothing_was_harvested(tmp_path: Path, capsys: pyte
     with pytest.raises(SystemExit) as exc:
         c2_harvest.main(['--seeds', '9-3'])
     assert exc.value.code == 2
+
+
+def test_p6_takes_windows_from_a_parameter_file_or_the_calibration_output(tmp_path: Path,
+                                                                         capsys: pytest.CaptureFixture[str]) -> None:
+    """--windows: the shipped parameter file gives the shipped windows; a flat mapping (what
+    smarticle-feedback-calibrate prints) changes them; a file without windows is refused with exit code 2."""
+    root = Path(__file__).resolve().parents[2]
+    assert p6.windows_file(root / 'smarticle_feedback' / 'config' / 'feedback.yaml') == p6.default_feedback_config()
+    flat = tmp_path / 'calibrated.yaml'
+    flat.write_text('arm1_back_min: 0.15\narm1_back_max: 10.31\narm1_back_enabled: true\n', encoding='utf-8')
+    config = p6.windows_file(flat)
+    assert config != p6.default_feedback_config()
+    assert 'arm1_back' in config.enabled_faces and 'arm1_back' not in p6.default_feedback_config().enabled_faces
+    empty = tmp_path / 'empty.yaml'
+    empty.write_text('period: 1.6\n', encoding='utf-8')
+    for bad, says in ((empty, 'no impact windows'), (tmp_path / 'missing.yaml', 'missing.yaml')):
+        with pytest.raises(SystemExit) as exc:
+            p6.main(['--windows', str(bad)])
+        assert exc.value.code == 2 and says in capsys.readouterr().err
+    typo = tmp_path / 'typo.yaml'
+    typo.write_text('arm1_bak_min: 1.0\narm1_back_max: 10.0\n', encoding='utf-8')
+    with pytest.raises(SystemExit):
+        p6.main(['--windows', str(typo)])
+    assert 'arm1_bak_min' in capsys.readouterr().err
