@@ -437,9 +437,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog='smarticle-p6', description=__doc__.split('\n')[0])
     parser.add_argument('--seeds', type=int, default=40)
     parser.add_argument('--periods', type=float, default=200.0)
-    parser.add_argument('--open-loop', type=float, nargs='+', default=[70.0, 80.0, 85.0, 90.0],
-                        help='open-loop amplitudes (deg)')
-    parser.add_argument('--feedback', type=float, nargs='+', default=[90.0], help='feedback amplitudes (deg)')
+    parser.add_argument('--open-loop', type=float, nargs='*', default=[70.0, 80.0, 85.0, 90.0],
+                        help='open-loop amplitudes (deg); none after the flag: no open-loop condition')
+    parser.add_argument('--feedback', type=float, nargs='*', default=[90.0],
+                        help='feedback amplitudes (deg); none after the flag: no feedback condition')
     parser.add_argument('--jobs', type=int, default=2, help='parallel processes (at most 2 here)')
     parser.add_argument('--out', default='out/feedback', help='output folder')
     parser.add_argument('--contacts', action='store_true',
@@ -464,6 +465,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.quick:
         args.seeds, args.periods, args.open_loop, args.feedback = 3, 30.0, [90.0], [90.0]
     conditions = [Condition(a, False) for a in args.open_loop] + [Condition(a, True) for a in args.feedback]
+    if not conditions:
+        parser.error('no condition to run: give --open-loop or --feedback amplitudes')
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     wall = time.perf_counter()
