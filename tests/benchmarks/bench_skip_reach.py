@@ -96,6 +96,11 @@ def bounds(row: dict[str, float]) -> dict[str, float]:
     return out
 
 
+def margin_columns(prefix: str, header: str, fmt: str) -> list[tuple[str, str, str]]:
+    """Table columns ``<prefix>_<margin>mm``, one per margin of MARGINS, headed ``header`` with the margin in mm."""
+    return [(f'{prefix}_{m * 1e3:g}mm', header.format(f'{m * 1e3:g}'), fmt) for m in MARGINS]
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the census on each seed, print the shares and the bounds, write the CSV."""
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -121,21 +126,14 @@ def main(argv: list[str] | None = None) -> int:
     mean = {k: float(np.mean([r[k] for r in rows])) for k in rows[0] if k != 'seed'}
     mean['seed'] = 'mean'  # type: ignore[assignment]
     rows.append(mean)
-    columns = [('seed', 'seed', '')]
-    for m in MARGINS:
-        columns.append((f'any_{m * 1e3:g}mm', f'ticks, some pair within {m * 1e3:g} mm', '.3f'))
-    for m in MARGINS:
-        columns.append((f'robot_{m * 1e3:g}mm', f'robots within {m * 1e3:g} mm', '.3f'))
-    columns.append(('far_robot_periods', 'robot-periods out of reach', '.4f'))
-    print(markdown_table(rows, columns))
+    shares = [('seed', 'seed', ''), *margin_columns('any', 'ticks, some pair within {} mm', '.3f'),
+              *margin_columns('robot', 'robots within {} mm', '.3f'),
+              ('far_robot_periods', 'robot-periods out of reach', '.4f')]
+    print(markdown_table(rows, shares))
     print('\nLargest speed-up of each skip if its bookkeeping cost nothing (step ratio 2):')
-    bound_cols = [('seed', 'seed', '')]
-    for m in MARGINS:
-        bound_cols.append((f'multirate_{m * 1e3:g}mm', f'multi-rate, {m * 1e3:g} mm', '.2f'))
-    for m in MARGINS:
-        bound_cols.append((f'island_{m * 1e3:g}mm', f'per-island, {m * 1e3:g} mm', '.2f'))
-    bound_cols.append(('cached_cycle', 'cached cycle', '.3f'))
-    print(markdown_table(rows, bound_cols))
+    gains = [('seed', 'seed', ''), *margin_columns('multirate', 'multi-rate, {} mm', '.2f'),
+             *margin_columns('island', 'per-island, {} mm', '.2f'), ('cached_cycle', 'cached cycle', '.3f')]
+    print(markdown_table(rows, gains))
     path = write_csv(out_path('sim_skip_reach.csv', args.out_dir), rows)
     print(f'wrote {path}')
     return 0
