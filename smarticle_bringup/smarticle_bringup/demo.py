@@ -105,7 +105,7 @@ def write_params(args: argparse.Namespace, path: Path) -> dict[str, Any]:
     data: dict[str, Any] = {'/**': {'ros__parameters': shared},
                             '/sim_bridge': {'ros__parameters': {'phase_jitter': float(args.phase_jitter)}},
                             '/glider_monitor': {'ros__parameters': {'min_periods': args.min_periods}}}
-    offsets = clock_offsets(len(robots), args.seed) if getattr(args, 'clock_noise', False) else None
+    offsets = clock_offsets(len(robots), args.seed) if args.clock_noise else None
     for k, robot in enumerate(robots):
         phase = float(robot.gait.phase) if robot.gait is not None else 0.0
         own: dict[str, Any] = {'phase': phase}

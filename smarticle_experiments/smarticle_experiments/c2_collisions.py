@@ -46,18 +46,16 @@ def record_pair(seed: int = 0, periods: float = 40.0, alpha_max_deg: float = 90.
     links: list[np.ndarray] = []
     poses: list[np.ndarray] = []
 
-    reading: list[FsrReading] = []
-
-    def on_step(run: Runner) -> None:
-        ph = run.physics
-        if not reading:
-            reading.append(FsrReading(ph))
-        times.append(ph.time)
-        fsr.append(reading[0].step())   # what the feedback policy's FSR sample is made of
-        links.append(ph.link_contacts(0, 1))
-        poses.append(ph.poses().copy())
-
     with Runner.with_gaits(config, scene) as runner:
+        reading = FsrReading(runner.physics)
+
+        def on_step(run: Runner) -> None:
+            ph = run.physics
+            times.append(ph.time)
+            fsr.append(reading.step())   # what the feedback policy's FSR sample is made of
+            links.append(ph.link_contacts(0, 1))
+            poses.append(ph.poses().copy())
+
         runner.step_hooks.append(on_step)
         assert runner.gaits is not None
         runner.gaits.start(0.0)

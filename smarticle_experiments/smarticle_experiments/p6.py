@@ -222,15 +222,13 @@ def windows_file(path: str | Path) -> FeedbackConfig:
     ``feedback parameters`` that ``smarticle-feedback-calibrate`` prints. ParameterError / ValueError name
     the problem (an unknown or out-of-range parameter, a file without windows)."""
     import yaml
-    from smarticle_common.params import ParameterError
-    from smarticle_feedback.parameters import config_from_values, default_values
+    from smarticle_common.params import ParameterError, read_defaults_yaml
+    from smarticle_feedback.parameters import NODE_NAME, config_from_values, default_values
 
-    data = yaml.safe_load(Path(path).read_text(encoding='utf-8'))
-    if isinstance(data, dict):
-        for key in ('feedback', '/feedback', '/**'):
-            if isinstance(data.get(key), dict) and 'ros__parameters' in data[key]:
-                data = data[key]['ros__parameters']
-                break
+    try:
+        data: Any = read_defaults_yaml(str(path), NODE_NAME)
+    except ParameterError:   # no node section: a flat mapping
+        data = yaml.safe_load(Path(path).read_text(encoding='utf-8'))
     if not isinstance(data, dict) or not any(str(k).endswith(('_min', '_max', '_enabled')) for k in data):
         raise ParameterError(f'{path}: no impact windows (<face>_min / _max / _enabled) in it')
     return config_from_values(default_values(**data))

@@ -203,14 +203,10 @@ class SimBridgeCore:
         self._camera: OverheadCamera | None = None
         self._next_frame_ns = 0
         self._fsr_watch: list[int] = []
-        self._fsr_peak: np.ndarray | None = None
-        self._fsr_reading: FsrReading | None = None
+        self._fsr_reading: FsrReading | None = None   # of the robots in _fsr_watch, while there are any
 
     def _fsr_step(self, _: Runner) -> None:
-        if self._fsr_reading is None:
-            self._fsr_reading = FsrReading(self.physics, self._fsr_watch)
-        forces = self._fsr_reading.step()
-        self._fsr_peak = forces if self._fsr_peak is None else np.maximum(self._fsr_peak, forces)
+        self._fsr_reading.step()  # type: ignore[union-attr]   # hooked only while the reading exists
 
     def fsr_sample(self, robots: list[int]) -> np.ndarray:
         """(len(robots), 4) FSR sample of ``robots``: each face's peak force since the previous sample.
@@ -221,14 +217,14 @@ class SimBridgeCore:
         per-step hook is removed and the physics steps a tick at once again.
         """
         now = self.physics.fsr(robots)
-        if self._fsr_peak is not None:
+        peak = self._fsr_reading.take_peak() if self._fsr_reading is not None else None
+        if peak is not None:
             for row, k in enumerate(robots):
                 if k in self._fsr_watch:   # the peak of the readings, which include this instant's step
-                    now[row] = self._fsr_peak[self._fsr_watch.index(k)]
-        if list(robots) != self._fsr_watch:
-            self._fsr_reading = None   # a new set of robots: a new reading (its average starts from zero)
+                    now[row] = peak[self._fsr_watch.index(k)]
+        if list(robots) != self._fsr_watch:   # a new set of robots: a new reading (its average starts from zero)
+            self._fsr_reading = FsrReading(self.physics, robots) if robots else None
         self._fsr_watch = list(robots)
-        self._fsr_peak = None
         hooked = self._fsr_step in self.runner.step_hooks
         if robots and not hooked:
             self.runner.step_hooks.append(self._fsr_step)

@@ -451,6 +451,8 @@ class FsrReading:
     of ``PhysicsConfig.fsr_window`` (``fsr_steps``), so an impulsive kick reads the same at every time step.
 
     Call ``step()`` once after every physics step; with ``fsr_steps`` = 1 it is ``Physics.fsr`` itself.
+    ``take_peak()`` gives each face's largest reading since the previous take: the FSR sample of a control
+    tick (collision kicks are shorter than a tick), on the batch feedback path and in the sim bridge alike.
     """
 
     def __init__(self, physics: Physics, robots: Sequence[int] | None = None) -> None:
@@ -459,15 +461,22 @@ class FsrReading:
         self.steps = physics.config.physics.fsr_steps
         self._history = np.zeros((self.steps, len(self.robots), len(FSR_FACES)))
         self._next = 0
+        self._peak: np.ndarray | None = None
 
     def step(self) -> np.ndarray:
         """(len(robots), 4) reading after the step just taken: the mean force of the last ``steps`` steps."""
         forces = self.physics.fsr(self.robots)
-        if self.steps == 1:
-            return forces
-        self._history[self._next] = forces
-        self._next = (self._next + 1) % self.steps
-        return self._history.sum(axis=0) / self.steps
+        if self.steps > 1:
+            self._history[self._next] = forces
+            self._next = (self._next + 1) % self.steps
+            forces = self._history.sum(axis=0) / self.steps
+        self._peak = forces if self._peak is None else np.maximum(self._peak, forces)
+        return forces
+
+    def take_peak(self) -> np.ndarray | None:
+        """Each face's largest reading since the previous call (None: no step since), and start over."""
+        peak, self._peak = self._peak, None
+        return peak
 
 
 def _quiet_client() -> BulletClient:

@@ -317,27 +317,22 @@ class FeedbackController:
         self._robots = sorted(self.policies)
         self.halts: list[tuple[float, int, str]] = []
         self.peak_hold = peak_hold
-        self._peak: np.ndarray | None = None
-        self._reading: FsrReading | None = None
-        self._attached = False
+        self._reading: FsrReading | None = None   # with peak_hold: built at the first tick
         #: With ``record``: every sample given to the policies, as (time, forces (robots, 4)).
         self.samples: list[tuple[float, np.ndarray]] | None = [] if record else None
 
     def _on_step(self, runner: Runner) -> None:
-        if self._reading is None:
-            self._reading = FsrReading(self.gaits.physics, self._robots)
-        forces = self._reading.step()
-        self._peak = forces if self._peak is None else np.maximum(self._peak, forces)
+        self._reading.step()  # type: ignore[union-attr]   # attached only once the reading exists
 
     def before_tick(self, runner: Runner) -> None:
         """Read the FSR forces of the policies' robots and halt where a policy says so."""
         physics = self.gaits.physics
         now = physics.time
-        if self.peak_hold and not self._attached:
+        if self.peak_hold and self._reading is None:
+            self._reading = FsrReading(physics, self._robots)
             runner.step_hooks.append(self._on_step)
-            self._attached = True
-        forces = physics.fsr(self._robots) if self._peak is None else self._peak
-        self._peak = None
+        peak = self._reading.take_peak() if self._reading is not None else None
+        forces = physics.fsr(self._robots) if peak is None else peak
         if self.samples is not None:
             self.samples.append((now, np.array(forces)))
         for row, k in enumerate(self._robots):

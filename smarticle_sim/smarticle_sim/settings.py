@@ -38,7 +38,7 @@ class PhysicsConfig:
     time_step: float = 1.0 / 960.0
     control_tick: float = 1.0 / 60.0            # must be a whole number of time steps
     #: 5 at 1/960 s: the P1 figures agree with 10 iterations and with 1/1920 s on the same seeds, the drift
-    #: is 4.7 % off its limit, and a P1 trial is 1.15x faster than with 10 (docs/sim_calibration.md, Speed).
+    #: is 4.7 % off its limit, and a P1 trial is 1.17x faster than with 10 (docs/sim_calibration.md, Speed).
     solver_iterations: int = 5
     contact_breaking_threshold: float = 0.002   # m; Bullet's default 0.02 is far larger than the robots' gaps
     gravity: float = 9.81
