@@ -83,19 +83,24 @@ MODELS['proposed soft'] = {**MODELS['proposed'], 'restitution': 0.0, 'x_contact_
 
 
 def parse_value(text: str) -> Any:
-    """'none' -> None, 'true'/'false' -> bool, 'a/b' -> a/b, ints stay int, else float."""
+    """'none' -> None, 'true'/'false' -> bool, 'a/b' -> a/b, ints stay int, numbers float, else the text."""
     low = text.lower()
     if low == 'none':
         return None
     if low in ('true', 'false'):
         return low == 'true'
-    if '/' in text:
+    if text.count('/') == 1:
         a, b = text.split('/')
-        return float(a) / float(b)
-    try:
-        return int(text)
-    except ValueError:
-        return float(text)
+        try:
+            return float(a) / float(b)
+        except ValueError:
+            return text
+    for kind in (int, float):
+        try:
+            return kind(text)
+        except ValueError:
+            pass
+    return text
 
 
 def model_settings(name: str, sets: list[str] | None = None) -> dict[str, Any]:

@@ -16,6 +16,9 @@ from smarticle_common.facts import SMALL, RobotSpec, require_non_negative, requi
 
 from .errors import ConfigError
 
+#: The arm end shapes ``PhysicsConfig.arm_ends`` accepts.
+ARM_ENDS = ('square', 'round')
+
 
 class NotConvergedWarning(UserWarning):
     """A setting the simulation accepts but whose results are not converged in the time step."""
@@ -83,6 +86,12 @@ class PhysicsConfig:
     #: stay flat on the plate, as the real ones do (the paper never mentions one tipping). With restitution
     #: 0.85, jammed robots bounce between two contacts and roll over otherwise (study, C). 1 = the box's own.
     tilt_inertia_scale: float = 100.0
+    #: The arms' ends in plan view. 'square': the authors' box arms (5.0 x 0.3 x 2.3 cm). 'round': the same
+    #: box with both vertical end edges rounded to the arm's half thickness (a stadium in plan view: a box
+    #: of length L - t between two vertical cylinders of diameter t, same length, height, mass and
+    #: inertia), so an arm tip slides round another arm instead of catching on a box corner. A candidate
+    #: for the hook that binds the paper's isolated pairs (docs/sim_calibration.md, "Round arm ends").
+    arm_ends: str = 'square'
 
     #: The sim's FSR reading is each face's contact force averaged over this time (s; a whole number of
     #: steps, at least one), so a collision kick reads its impulse / fsr_window at every time step instead
@@ -112,6 +121,8 @@ class PhysicsConfig:
                 require_non_negative(self, name, error=ConfigError)
         require_non_negative(self, 'ccd_swept_sphere_radius', error=ConfigError)
         require_positive(self, 'tilt_inertia_scale', error=ConfigError)
+        if self.arm_ends not in ARM_ENDS:
+            raise ConfigError(f'PhysicsConfig.arm_ends must be one of {", ".join(ARM_ENDS)}, got {self.arm_ends!r}')
         if self.restitution_body_plate is not None and self.restitution_body_plate > 1.0:
             raise ConfigError(f'PhysicsConfig.restitution_body_plate must be in [0, 1], '
                               f'got {self.restitution_body_plate}')
