@@ -89,8 +89,10 @@ class PhysicsConfig:
     #: The arms' ends in plan view. 'square': the authors' box arms (5.0 x 0.3 x 2.3 cm). 'round': the same
     #: box with both vertical end edges rounded to the arm's half thickness (a stadium in plan view: a box
     #: of length L - t between two vertical cylinders of diameter t, same length, height, mass and
-    #: inertia), so an arm tip slides round another arm instead of catching on a box corner. A candidate
-    #: for the hook that binds the paper's isolated pairs (docs/sim_calibration.md, "Round arm ends").
+    #: inertia), so an arm tip slides round another arm instead of catching on a box corner. Measured as a
+    #: candidate for the hook that binds the paper's isolated pairs and rejected: on P1's seeds 1000-1029
+    #: 6 of 30 trials have an isolated glider against 10 of 30 square (docs/sim_calibration.md, "Round
+    #: arm ends").
     arm_ends: str = 'square'
 
     #: The sim's FSR reading is each face's contact force averaged over this time (s; a whole number of
