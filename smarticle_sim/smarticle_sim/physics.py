@@ -117,7 +117,7 @@ class Physics:
         arm_shapes, arm_visuals = [], []
         for sign in (-1.0, 1.0):
             offset = [sign * half_l, 0.0, 0.0]
-            arm_shapes.append(self._arm_shape(sign))
+            arm_shapes.append(self._arm_shape(sign, arm_half))
             arm_visuals.append(c.createVisualShape(pybullet.GEOM_BOX, halfExtents=arm_half,
                                                    visualFramePosition=offset,
                                                    rgbaColor=[0.9, 0.5, 0.1, 1.0]))
@@ -161,22 +161,21 @@ class Physics:
         for k, placement in enumerate(self.scene.robots):
             self.send(k, (placement.alpha1, placement.alpha2), spec.servo_speed)
 
-    def _arm_shape(self, sign: float) -> int:
-        """The collision shape of the arm that extends along ``sign`` * x from its joint (``arm_ends``)."""
-        c, spec = self._client, self.config.robot
-        half_l, half_t, half_h = spec.arm_length / 2.0, spec.arm_thickness / 2.0, spec.arm_height / 2.0
+    def _arm_shape(self, sign: float, arm_half: list[float]) -> int:
+        """The collision shape (``arm_ends``) of the arm of half extents ``arm_half`` along ``sign`` * x."""
+        c = self._client
+        half_l, half_t, half_h = arm_half
         if self._physics.arm_ends == 'square':
-            return c.createCollisionShape(pybullet.GEOM_BOX, halfExtents=[half_l, half_t, half_h],
+            return c.createCollisionShape(pybullet.GEOM_BOX, halfExtents=arm_half,
                                           collisionFramePosition=[sign * half_l, 0.0, 0.0])
         # 'round': a box between two vertical cylinders of the arm's thickness, the same overall extent. The
         # compound's AABB is the box arm's, so Bullet gives the link the same inertia.
-        core = spec.arm_length - spec.arm_thickness
         return c.createCollisionShapeArray(
             shapeTypes=[pybullet.GEOM_BOX, pybullet.GEOM_CYLINDER, pybullet.GEOM_CYLINDER],
-            halfExtents=[[core / 2.0, half_t, half_h], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
-            radii=[0.0, half_t, half_t], lengths=[0.0, spec.arm_height, spec.arm_height],
+            halfExtents=[[half_l - half_t, half_t, half_h], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+            radii=[0.0, half_t, half_t], lengths=[0.0, 2.0 * half_h, 2.0 * half_h],
             collisionFramePositions=[[sign * half_l, 0.0, 0.0], [sign * half_t, 0.0, 0.0],
-                                     [sign * (spec.arm_length - half_t), 0.0, 0.0]])
+                                     [sign * (2.0 * half_l - half_t), 0.0, 0.0]])
 
     # ----------------------------------------------------------------- properties
     @property

@@ -69,14 +69,14 @@ def test_bullet_gets_the_restitutions_and_the_tilt_inertia(config: SimConfig) ->
 def test_round_arm_ends_keep_the_arm_and_round_its_end_edges(config: SimConfig) -> None:
     """'round' arms: a box of length L - t between two vertical cylinders of diameter t; mass and inertia kept."""
     spec = config.robot
-    shapes = {}
+    shapes, inertia = {}, {}   # per arm_ends: the arm's collision shapes, its (mass, inertia diagonal)
     for ends in ('square', 'round'):
         with Runner.with_gaits(config.with_physics(arm_ends=ends), lone_robot()) as run:
             world = run.physics
             c, body = world.client, world.body_ids[0]
             shapes[ends] = c.getCollisionShapeData(body, ARM_JOINTS[0])
             info = c.getDynamicsInfo(body, ARM_JOINTS[0])
-            shapes[ends + ' inertia'] = (info[0], info[2])
+            inertia[ends] = (info[0], info[2])
     assert [s[2] for s in shapes['square']] == [3]                          # GEOM_BOX
     assert [s[2] for s in shapes['round']] == [3, 4, 4]                     # box + two GEOM_CYLINDERs
     box, cap1, cap2 = shapes['round']
@@ -86,8 +86,8 @@ def test_round_arm_ends_keep_the_arm_and_round_its_end_edges(config: SimConfig) 
         assert cap[3][0] == pytest.approx(spec.arm_height) and cap[3][1] == pytest.approx(spec.arm_thickness / 2)
     # the caps sit at the box's ends, so the arm spans its full length
     assert abs(cap2[5][0] - cap1[5][0]) == pytest.approx(spec.arm_length - spec.arm_thickness)
-    assert shapes['round inertia'][0] == shapes['square inertia'][0] == spec.arm_mass
-    assert shapes['round inertia'][1] == pytest.approx(shapes['square inertia'][1], rel=1e-9)
+    assert inertia['round'][0] == inertia['square'][0] == spec.arm_mass
+    assert inertia['round'][1] == pytest.approx(inertia['square'][1], rel=1e-9)
 
 
 def test_unknown_arm_ends_refused() -> None:
