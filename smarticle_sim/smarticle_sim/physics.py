@@ -85,7 +85,8 @@ class Physics:
     def _build(self) -> None:
         """Create the plate and the robots and set the engine parameters once."""
         c, ph, spec = self._client, self._physics, self.config.robot
-        c.setPhysicsEngineParameter(fixedTimeStep=ph.time_step, numSolverIterations=ph.solver_iterations,
+        c.setPhysicsEngineParameter(fixedTimeStep=ph.time_step,
+                                    numSolverIterations=ph.iterations_for(len(self.scene.robots)),
                                     numSubSteps=0, deterministicOverlappingPairs=1,
                                     contactBreakingThreshold=ph.contact_breaking_threshold,
                                     contactERP=ph.contact_erp)

@@ -43,6 +43,13 @@ class PhysicsConfig:
     #: 5 at 1/960 s: the P1 figures agree with 10 iterations and with 1/1920 s on the same seeds, the drift
     #: is 4.7 % off its limit, and a P1 trial is 1.17x faster than with 10 (docs/sim_calibration.md, Speed).
     solver_iterations: int = 5
+    #: Large packs: a scene of more than ``large_pack_robots`` robots is stepped with at least
+    #: ``large_pack_iterations`` solver iterations. Bullet's sequential-impulse solver converges more slowly
+    #: on larger contact islands: 50 densely packed robots at 5 iterations tipped a robot in one of two
+    #: seeds and ran clean in both with 10 (docs/sim_calibration.md, Stability). 7 is the largest pack
+    #: measured clean at 5 (0 stops in 221 dense trials), so the rule starts above it.
+    large_pack_robots: int = 7
+    large_pack_iterations: int = 10
     contact_breaking_threshold: float = 0.002   # m; Bullet's default 0.02 is far larger than the robots' gaps
     gravity: float = 9.81
     friction_body_plate: float = 0.30           # the authors' Chrono model (0.3-0.37)
@@ -109,7 +116,8 @@ class PhysicsConfig:
                              error=ConfigError)
         if self.contact_erp > 1.0:
             raise ConfigError(f'PhysicsConfig.contact_erp must be in (0, 1], got {self.contact_erp}')
-        for name in ('solver_iterations', 'trouble_every', 'penetration_checks'):
+        for name in ('solver_iterations', 'trouble_every', 'penetration_checks', 'large_pack_robots',
+                     'large_pack_iterations'):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ConfigError(f'PhysicsConfig.{name} must be an integer >= 1, got {value!r}')
@@ -147,6 +155,12 @@ class PhysicsConfig:
     def fsr_steps(self) -> int:
         """Physics steps the FSR reading averages over (``fsr_window`` / ``time_step``, rounded, at least 1)."""
         return max(1, round(self.fsr_window / self.time_step))
+
+    def iterations_for(self, n_robots: int) -> int:
+        """The solver iterations a scene of ``n_robots`` robots is stepped with (see ``large_pack_robots``)."""
+        if n_robots > self.large_pack_robots:
+            return max(self.solver_iterations, self.large_pack_iterations)
+        return self.solver_iterations
 
     def servo_gain(self) -> float:
         """The servo loop's position gain per step given to Bullet (see ``servo_bandwidth``)."""

@@ -118,8 +118,10 @@ def main(argv: list[str] | None = None) -> int:
     gait = GaitConfig.from_degrees(90.0, servo_speed=base.robot.servo_speed)
     dt = base.physics.time_step
     steps_per_period = gait.period / dt
-    print(f'# simulation cost against robot count; time step {dt:.6g} s, {base.physics.solver_iterations} '
-          f'solver iterations, best of {repeats} interleaved, {args.clock} time; {machine_line()}')
+    ph = base.physics
+    print(f'# simulation cost against robot count; time step {dt:.6g} s, {ph.solver_iterations} solver iterations '
+          f'({ph.large_pack_iterations} above {ph.large_pack_robots} robots), best of {repeats} interleaved, '
+          f'{args.clock} time; {machine_line()}')
     progress = Progress(len(args.robots) * repeats * (not args.skip_scale) + repeats * (not args.skip_p1),
                         'scale', not args.no_progress)
     rows: list[dict[str, object]] = []

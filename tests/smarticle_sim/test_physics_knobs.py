@@ -6,8 +6,9 @@ import math
 
 import pytest
 
+from smarticle_common.gait import GaitConfig
 from smarticle_sim.errors import ConfigError
-from smarticle_sim.scenes import RobotPlacement, Scene
+from smarticle_sim.scenes import RobotPlacement, Scene, dense_scene
 from smarticle_sim.settings import PhysicsConfig, SimConfig
 from smarticle_sim.physics import ARM_JOINTS
 from smarticle_sim.runner import Runner
@@ -42,6 +43,20 @@ def test_servo_bandwidth_fixes_the_approach_whatever_the_step() -> None:
 def test_non_positive_knobs_refused(field: str) -> None:
     with pytest.raises(ConfigError, match=field):
         PhysicsConfig(**{field: 0.0})
+
+
+def test_large_packs_get_more_solver_iterations(config: SimConfig, gait90: GaitConfig) -> None:
+    """Above ``large_pack_robots`` robots Bullet is stepped with ``large_pack_iterations`` (never fewer)."""
+    ph = PhysicsConfig()
+    assert (ph.large_pack_robots, ph.large_pack_iterations) == (7, 10)
+    assert [ph.iterations_for(n) for n in (1, 2, 7, 8, 50)] == [5, 5, 5, 10, 10]
+    assert PhysicsConfig(solver_iterations=20).iterations_for(50) == 20
+    assert PhysicsConfig(large_pack_robots=100).iterations_for(50) == 5
+    for n, expected in ((7, 5), (8, 10)):
+        with Runner.with_gaits(config, dense_scene(config.robot, gait90, n, seed=1)) as run:
+            assert run.physics.client.getPhysicsEngineParameters()['numSolverIterations'] == expected
+    with pytest.raises(ConfigError, match='large_pack_iterations'):
+        PhysicsConfig(large_pack_iterations=0)
 
 
 def test_restitution_body_plate_above_one_refused() -> None:
