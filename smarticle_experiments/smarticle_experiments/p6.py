@@ -149,10 +149,11 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
                    base: tuple[float, float, float, tuple[float, float]] = C2_START,
                    r_bind_bl: float = R_BIND_BL, sample_every: int = 3, record_samples: bool = False,
                    robot_changes: Mapping[str, float] | None = None, count_contacts: bool = False,
-                   noise: Any = None) -> PairTrial:
+                   noise: Any = None, physics_changes: Mapping[str, Any] | None = None) -> PairTrial:
     """Run one C2 pair for ``periods`` gait periods, with the impact controller when ``condition.feedback``.
 
-    ``robot_changes`` replaces fields of the preset's ``RobotSpec`` (the sensitivity study of the assumed values).
+    ``robot_changes`` replaces fields of the preset's ``RobotSpec`` (the sensitivity study of the assumed values),
+    ``physics_changes`` fields of its ``PhysicsConfig`` (a physics candidate, e.g. another restitution).
     ``count_contacts`` lists the gait periods in which the robots touched at any physics step
     (``PairTrial.contact_periods``; a step hook, the trajectory is the same).
     ``noise`` is a ``NoiseConfig`` (None: off); its draws take the trial ``seed`` unless it names its own.
@@ -167,6 +168,8 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
     config = SimConfig.from_preset(preset)
     if robot_changes:
         config = replace(config, robot=replace(config.robot, **dict(robot_changes)))  # type: ignore[arg-type]
+    if physics_changes:
+        config = config.with_physics(**dict(physics_changes))
     if noise is not None:
         config = config.with_noise(noise)   # the pair scene carries the trial seed its draws take
     gait = GaitConfig.from_degrees(condition.alpha_max_deg, servo_speed=config.robot.servo_speed)
@@ -234,22 +237,25 @@ def windows_file(path: str | Path) -> FeedbackConfig:
     return config_from_values(default_values(**data))
 
 
-def _run(args: tuple[Condition, int, float, bool, str, str, FeedbackConfig | None]) -> PairTrial:
-    condition, seed, periods, contacts, start, noise, feedback = args
+def _run(args: tuple[Condition, int, float, bool, str, str, FeedbackConfig | None, dict[str, Any]]) -> PairTrial:
+    condition, seed, periods, contacts, start, noise, feedback, physics = args
     return run_pair_trial(condition, seed, periods, feedback=feedback, count_contacts=contacts, base=STARTS[start],
-                          noise=p6_noise(noise))
+                          noise=p6_noise(noise), physics_changes=physics)
 
 
 def run_p6(conditions: Sequence[Condition], seeds: Sequence[int], periods: float, jobs: int = 2,
            progress: bool = True, contacts: bool = False, start: str = 'harvested',
-           noise: str = 'paper', feedback: FeedbackConfig | None = None) -> list[PairTrial]:
+           noise: str = 'paper', feedback: FeedbackConfig | None = None,
+           physics: Mapping[str, Any] | None = None) -> list[PairTrial]:
     """Every (condition, seed) trial, ``jobs`` processes in parallel (at most 2 on the shared machine), from
     the named ``start`` (``STARTS``) with the named ``noise`` (``p6_noise``); the feedback conditions use
-    ``feedback`` (default: the shipped windows, ``default_feedback_config``)."""
+    ``feedback`` (default: the shipped windows, ``default_feedback_config``); ``physics`` replaces fields of
+    the ``PhysicsConfig``."""
     if start not in STARTS:
         raise ValueError(f'start must be one of {", ".join(STARTS)}, got {start!r}')
     p6_noise(noise)
-    work = [(c, s, periods, contacts, start, noise, feedback) for c in conditions for s in seeds]
+    changes = dict(physics or {})
+    work = [(c, s, periods, contacts, start, noise, feedback, changes) for c in conditions for s in seeds]
     trials: list[PairTrial] = []
     with ProcessPoolExecutor(max_workers=max(1, jobs)) as pool:
         for trial in pool.map(_run, work):
@@ -430,6 +436,24 @@ def plot_lifetimes(trials: Sequence[PairTrial], path: Path, periods: float) -> P
     return path
 
 
+def physics_changes(parser: argparse.ArgumentParser, items: Sequence[str]) -> dict[str, Any]:
+    """The ``--set NAME=VALUE`` items as PhysicsConfig changes; a bad name or value is a usage error naming it."""
+    from smarticle_experiments.physics_study import parse_value
+    from smarticle_sim.settings import SimConfig
+
+    changes: dict[str, Any] = {}
+    for item in items:
+        name, sep, value = item.partition('=')
+        if not sep or not name:
+            parser.error(f'--set {item!r}: expected NAME=VALUE')
+        changes[name.strip()] = parse_value(value.strip())
+    try:
+        SimConfig.from_preset('feedback').with_physics(**changes)
+    except (TypeError, ValueError) as err:   # an unknown field, or a value PhysicsConfig refuses
+        parser.error(f'--set: {err}')
+    return changes
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of `smarticle-p6`: table on stdout, CSV and PNGs in --out."""
     parser = argparse.ArgumentParser(prog='smarticle-p6', description=__doc__.split('\n')[0])
@@ -452,8 +476,11 @@ def main(argv: Sequence[str] | None = None) -> int:
                         help='YAML file of impact windows for the feedback conditions (a parameter file such as '
                              "config/feedback.yaml, or the 'feedback parameters' of smarticle-feedback-calibrate); "
                              'default: the shipped windows')
+    parser.add_argument('--set', action='append', default=[], metavar='NAME=VALUE',
+                        help='replace a PhysicsConfig field for every trial (repeatable), e.g. restitution=0.5')
     parser.add_argument('--quick', action='store_true', help='3 seeds, 30 periods, open loop 90 vs feedback 90')
     args = parser.parse_args(argv)
+    physics = physics_changes(parser, args.set)
     feedback = None
     if args.windows is not None:
         try:
@@ -469,7 +496,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     wall = time.perf_counter()
     trials = run_p6(conditions, range(args.seeds), args.periods, min(args.jobs, 2), contacts=args.contacts,
-                    start=args.start, noise=args.noise, feedback=feedback)
+                    start=args.start, noise=args.noise, feedback=feedback, physics=physics)
     rows = summarize(trials, args.periods)
     with (out / 'p6_trials.csv').open('w', newline='') as handle:
         writer = csv.writer(handle)

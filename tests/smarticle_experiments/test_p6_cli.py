@@ -66,3 +66,20 @@ def test_p6_takes_windows_from_a_parameter_file_or_the_calibration_output(tmp_pa
     with pytest.raises(SystemExit):
         p6.main(['--windows', str(typo)])
     assert 'arm1_bak_min' in capsys.readouterr().err
+
+
+def test_p6_set_changes_the_physics_of_every_trial(capsys: pytest.CaptureFixture[str]) -> None:
+    """--set NAME=VALUE replaces PhysicsConfig fields (the trajectory changes); a bad name or value is refused."""
+    runs = {}
+    for sets in ((), ('restitution=0.3',)):
+        physics = p6.physics_changes(p6.argparse.ArgumentParser(), sets)
+        trials = p6.run_p6([p6.Condition(90.0, False)], [0], 3.0, jobs=1, progress=False, noise='none',
+                           start='colliding', physics=physics)
+        runs[sets] = trials[0].r
+    assert runs[()].shape == runs[('restitution=0.3',)].shape
+    assert not (runs[()] == runs[('restitution=0.3',)]).all()
+    for bad, says in (('restitution=2', 'restitution'), ('no_such_field=1', 'no_such_field'),
+                      ('restitution', 'NAME=VALUE')):
+        with pytest.raises(SystemExit) as exc:
+            p6.main(['--set', bad])
+        assert exc.value.code == 2 and says in capsys.readouterr().err
