@@ -11,6 +11,7 @@ go to ``out/physics/<experiment>.png``::
     smarticle-physics-study pair --model authors --dt 240 480 960
     smarticle-physics-study basin --model authors --periods 75
     smarticle-physics-study dense --model authors --seeds 0-9 --periods 300
+    smarticle-physics-study impact --pairs 0.6:0.85 0.2:0.76 --dt 960 480 --speeds 0.3 0.1
 
 A *model* is a named set of settings (``MODELS``): PhysicsConfig / RobotSpec field overrides, plus the
 gait's servo speed. ``--set name=value`` changes one field on top of the model. Extra Bullet knobs that
@@ -918,6 +919,54 @@ def exp_tables(args: argparse.Namespace) -> None:
                     print('   seed', r['seed'], r['trouble'])
 
 
+def exp_impact(args: argparse.Namespace) -> None:
+    """The restitution Bullet gives a head-on impact of two robot bodies, against the meeting point within a
+    step (``smarticle_sim.impact``), for each ERP:restitution pair, step and speed: table, CSV and PNG."""
+    from smarticle_sim.impact import impact_sweep, summary
+
+    base, _, _ = make_config(model_settings('shipped', args.set))
+    rows: list[dict[str, Any]] = []
+    curves: dict[str, list[float]] = {}
+    for pair in args.pairs:
+        erp, _, e = pair.partition(':')
+        for dtinv in args.dt:
+            for speed in args.speeds:
+                physics = replace(base.physics, contact_erp=float(erp), restitution=float(e),
+                                  time_step=1.0 / dtinv, control_tick=1.0 / 60.0 if dtinv % 60 == 0 else 1.0 / dtinv)
+                impacts = impact_sweep(physics, base.robot, speed, args.phases)
+                stats = summary(impacts)
+                overlap_mm = 1e3 * stats.pop('overlap_max')
+                rows.append({'contact_erp': float(erp), 'restitution': float(e), 'dt_inv': dtinv, 'speed': speed,
+                             **{k: round(v, 4) for k, v in stats.items()}, 'overlap_mm': round(overlap_mm, 3)})
+                if dtinv == args.dt[0] and speed == args.speeds[0]:
+                    curves[f'ERP {erp}, restitution {e}'] = [i.restitution for i in impacts]
+    print(f'head-on impact of two robot bodies ({base.robot.total_mass * 1e3:.1f} g each), {args.phases} meeting '
+          f'points evenly spread over one step; effective restitution = separation / approach speed')
+    print('| contact ERP | restitution set | step | speed (m/s) | effective: mean | sd | min | max | overlap (mm) |')
+    print('| ---: | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: |')
+    for r in rows:
+        print(f"| {r['contact_erp']:g} | {r['restitution']:g} | 1/{r['dt_inv']} s | {r['speed']:g} | {r['mean']:.3f} | "
+              f"{r['sd']:.3f} | {r['min']:.3f} | {r['max']:.3f} | {r['overlap_mm']:.2f} |")
+    OUT.mkdir(parents=True, exist_ok=True)
+    with (OUT / 'impact.csv').open('w', newline='') as handle:
+        writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(6.5, 4))
+    phase = np.arange(args.phases) / args.phases
+    for label, values in curves.items():
+        ax.plot(phase, values, marker='o', ms=3, label=label)
+    ax.axhline(0.85, color='k', lw=0.8, ls='--', label="the authors' 0.85")
+    ax.set_xlabel('where in the step the bodies meet (fraction of a step)')
+    ax.set_ylabel('effective restitution')
+    ax.set_title(f'head-on impact at {args.speeds[0]:g} m/s, step 1/{args.dt[0]} s')
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(OUT / 'impact.png', dpi=120)
+    print(OUT / 'impact.csv', OUT / 'impact.png')
+
+
 def main() -> None:
     """Entry point of ``smarticle-physics-study``: run one experiment of the study."""
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -953,12 +1002,19 @@ def main() -> None:
     sub.choices['dense'].add_argument('--seeds', default='0-9')
     sub.choices['dense'].add_argument('--n', type=int, default=7)
     sub.choices['dense'].add_argument('--jitter', type=float, default=0.0)
+    p = sub.add_parser('impact')
+    p.add_argument('--set', action='append', help='PhysicsConfig field on top of the shipped model')
+    p.add_argument('--pairs', nargs='*', default=['0.6:0.85', '0.2:0.76', '0.1:0.8', '0.6:0'],
+                   help='contact ERP:restitution pairs')
+    p.add_argument('--dt', type=int, nargs='*', default=[960, 480, 1920])
+    p.add_argument('--speeds', type=float, nargs='*', default=[0.3, 0.1, 0.6])
+    p.add_argument('--phases', type=int, default=16, help='meeting points per step')
     sub.add_parser('tables')
     p = sub.add_parser('figures')
     p.add_argument('which', nargs='*', default=['trace', 'drift', 'mechanism'])
     args = parser.parse_args()
     {'tables': exp_tables, 'figures': exp_figures, 'collide': exp_collide, 'mechanism': exp_mechanism,
-     'drift': exp_drift, 'pair': exp_pair,
+     'drift': exp_drift, 'pair': exp_pair, 'impact': exp_impact,
      'basin': exp_basin, 'dense': exp_dense}[args.experiment](args)
 
 

@@ -1,0 +1,34 @@
+"""The impact probe: the restitution Bullet gives two robot bodies meeting head on (docs/sim_calibration.md)."""
+
+from __future__ import annotations
+
+import pytest
+
+from smarticle_sim.impact import impact, impact_sweep, summary
+from smarticle_sim.settings import SimConfig
+
+
+def test_the_contact_erp_adds_to_the_bounce_by_where_in_the_step_the_bodies_meet(config: SimConfig) -> None:
+    """At the default (ERP 0.6, restitution 0.85) impacts rebound with 0.85 to ~1.4 of the approach speed."""
+    default = summary(impact_sweep(config.physics, config.robot, speed=0.3, phases=8))
+    assert default['min'] == pytest.approx(0.85, abs=0.02)       # meeting at a step boundary: the bounce alone
+    assert default['mean'] > 1.05 and default['max'] > 1.3         # inside a step: the push-out adds to it
+    assert default['overlap_max'] == pytest.approx(0.3 * config.physics.time_step, rel=0.1)   # one step's travel
+    finer = summary(impact_sweep(config.with_physics(time_step=1 / 1920).physics, config.robot, 0.3, phases=8))
+    assert finer['mean'] == pytest.approx(default['mean'], abs=0.02)   # the same at half the step
+
+
+def test_a_low_erp_gives_the_restitution_that_was_set(config: SimConfig) -> None:
+    low = config.with_physics(contact_erp=0.1, restitution=0.8).physics
+    stats = summary(impact_sweep(low, config.robot, speed=0.3, phases=8))
+    assert stats['mean'] == pytest.approx(0.85, abs=0.02) and stats['max'] - stats['min'] < 0.12
+    none = config.with_physics(restitution=0.0, contact_erp=0.01).physics
+    assert impact(none, config.robot, speed=0.3).restitution < 0.05   # inelastic when nothing bounces
+
+
+def test_impact_refuses_a_speed_or_gap_that_is_no_impact(config: SimConfig) -> None:
+    for speed, gap in ((0.0, 0.001), (0.3, -0.001)):
+        with pytest.raises(ValueError, match='speed must be > 0 and gap >= 0'):
+            impact(config.physics, config.robot, speed, gap)
+    with pytest.raises(ValueError, match='phases'):
+        impact_sweep(config.physics, config.robot, phases=0)
