@@ -930,10 +930,10 @@ def exp_impact(args: argparse.Namespace) -> None:
     for pair in args.pairs:
         erp, _, e = pair.partition(':')
         for dtinv in args.dt:
+            config, _, _ = make_config(model_settings('shipped', (args.set or []) + [
+                f'contact_erp={erp}', f'restitution={e}', f'time_step=1/{dtinv}']))
             for speed in args.speeds:
-                physics = replace(base.physics, contact_erp=float(erp), restitution=float(e),
-                                  time_step=1.0 / dtinv, control_tick=1.0 / 60.0 if dtinv % 60 == 0 else 1.0 / dtinv)
-                impacts = impact_sweep(physics, base.robot, speed, args.phases)
+                impacts = impact_sweep(config.physics, config.robot, speed, args.phases)
                 stats = summary(impacts)
                 overlap_mm = 1e3 * stats.pop('overlap_max')
                 rows.append({'contact_erp': float(erp), 'restitution': float(e), 'dt_inv': dtinv, 'speed': speed,

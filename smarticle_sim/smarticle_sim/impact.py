@@ -23,7 +23,7 @@ import numpy as np
 import pybullet
 from smarticle_common.facts import RobotSpec
 
-from smarticle_sim.physics import _quiet_client
+from smarticle_sim.physics import configure_engine, quiet_client
 from smarticle_sim.settings import PhysicsConfig
 
 
@@ -41,14 +41,9 @@ def impact(physics: PhysicsConfig, spec: RobotSpec, speed: float = 0.3, gap: flo
     faces ``gap`` apart at the start; returns the effective restitution and the deepest overlap."""
     if speed <= 0.0 or gap < 0.0:
         raise ValueError(f'impact: speed must be > 0 and gap >= 0, got speed {speed}, gap {gap}')
-    c = _quiet_client()
+    c = quiet_client()
     try:
-        c.setPhysicsEngineParameter(fixedTimeStep=physics.time_step, numSolverIterations=physics.solver_iterations,
-                                    numSubSteps=0, deterministicOverlappingPairs=1,
-                                    contactBreakingThreshold=physics.contact_breaking_threshold,
-                                    contactERP=physics.contact_erp)
-        if physics.restitution_velocity_threshold is not None:
-            c.setPhysicsEngineParameter(restitutionVelocityThreshold=physics.restitution_velocity_threshold)
+        configure_engine(c, physics, n_robots=2)
         c.setGravity(0.0, 0.0, 0.0)
         half = [spec.body_width / 2.0, spec.body_depth / 2.0, spec.body_height / 2.0]
         shape = c.createCollisionShape(pybullet.GEOM_BOX, halfExtents=half)

@@ -32,7 +32,7 @@ from pybullet_utils.bullet_client import BulletClient
 from smarticle_common.poses import body_headings_and_tilts
 from smarticle_common.topics import FSR_FACES
 
-from .settings import SimConfig
+from .settings import PhysicsConfig, SimConfig
 from .errors import SceneError, SimError
 from .noise import FrictionField
 from .scenes import Scene
@@ -64,7 +64,7 @@ class Physics:
         self.scene = scene
         self._physics = config.physics
         self._steps_per_tick = config.physics.steps_per_tick
-        self._client = _quiet_client()
+        self._client = quiet_client()
         self._step_count = 0
         self._state: PhysicsState | None = None
         self._last_check: tuple[float, np.ndarray | None] = (0.0, None)
@@ -85,13 +85,7 @@ class Physics:
     def _build(self) -> None:
         """Create the plate and the robots and set the engine parameters once."""
         c, ph, spec = self._client, self._physics, self.config.robot
-        c.setPhysicsEngineParameter(fixedTimeStep=ph.time_step,
-                                    numSolverIterations=ph.iterations_for(len(self.scene.robots)),
-                                    numSubSteps=0, deterministicOverlappingPairs=1,
-                                    contactBreakingThreshold=ph.contact_breaking_threshold,
-                                    contactERP=ph.contact_erp)
-        if ph.restitution_velocity_threshold is not None:
-            c.setPhysicsEngineParameter(restitutionVelocityThreshold=ph.restitution_velocity_threshold)
+        configure_engine(c, ph, len(self.scene.robots))
         c.setGravity(0.0, 0.0, -ph.gravity)
         arm_friction, body_friction, plate_friction = ph.link_frictions()   # Bullet multiplies the pair's values
         restitution = math.sqrt(ph.restitution)
@@ -495,7 +489,20 @@ class FsrReading:
         return peak
 
 
-def _quiet_client() -> BulletClient:
+def configure_engine(client: BulletClient, physics: PhysicsConfig, n_robots: int) -> None:
+    """Give the engine the ``physics`` settings for a scene of ``n_robots`` robots: step, solver iterations
+    (``PhysicsConfig.iterations_for``), deterministic pair order, contact breaking threshold, contact ERP and
+    restitution velocity threshold."""
+    client.setPhysicsEngineParameter(fixedTimeStep=physics.time_step,
+                                     numSolverIterations=physics.iterations_for(n_robots),
+                                     numSubSteps=0, deterministicOverlappingPairs=1,
+                                     contactBreakingThreshold=physics.contact_breaking_threshold,
+                                     contactERP=physics.contact_erp)
+    if physics.restitution_velocity_threshold is not None:
+        client.setPhysicsEngineParameter(restitutionVelocityThreshold=physics.restitution_velocity_threshold)
+
+
+def quiet_client() -> BulletClient:
     """A DIRECT BulletClient, with the engine's start-up chatter on stdout ('argv[0]=') silenced."""
     try:
         fd = sys.stdout.fileno()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 from pathlib import Path
 
 import pytest
@@ -72,7 +73,7 @@ def test_p6_set_changes_the_physics_of_every_trial(capsys: pytest.CaptureFixture
     """--set NAME=VALUE replaces PhysicsConfig fields (the trajectory changes); a bad name or value is refused."""
     runs = {}
     for sets in ((), ('restitution=0.3',)):
-        physics = p6.physics_changes(p6.argparse.ArgumentParser(), sets)
+        physics = p6.physics_changes(argparse.ArgumentParser(), sets)
         trials = p6.run_p6([p6.Condition(90.0, False)], [0], 3.0, jobs=1, progress=False, noise='none',
                            start='colliding', physics=physics)
         runs[sets] = trials[0].r
