@@ -11,7 +11,8 @@ e + 0.37 x contact_erp) at every step, because the overlap and the push-out both
 
 The probe: two free boxes of the robot's body size and the robot's whole mass, no gravity, no friction,
 one moving at ``speed`` along its length into the other at rest, with the ``PhysicsConfig``'s step,
-solver iterations, contact ERP, breaking threshold, restitution and restitution velocity threshold.
+solver iterations, contact ERP, breaking threshold, restitution and restitution velocity threshold, or its
+soft contact (``contact_stiffness``) if set.
 """
 
 from __future__ import annotations
@@ -49,10 +50,13 @@ def impact(physics: PhysicsConfig, spec: RobotSpec, speed: float = 0.3, gap: flo
         shape = c.createCollisionShape(pybullet.GEOM_BOX, halfExtents=half)
         moving = c.createMultiBody(spec.total_mass, shape, basePosition=[0.0, 0.0, 1.0])
         still = c.createMultiBody(spec.total_mass, shape, basePosition=[spec.body_width + gap, 0.0, 1.0])
-        for body in (moving, still):   # Bullet multiplies the two bodies' values
-            c.changeDynamics(body, -1, restitution=math.sqrt(physics.restitution), lateralFriction=0.0,
-                             linearDamping=0.0, angularDamping=0.0,
-                             activationState=pybullet.ACTIVATION_STATE_DISABLE_SLEEPING)
+        soft = physics.soft_contact(spec.total_mass)
+        contact: dict[str, float] = {'restitution': math.sqrt(physics.restitution)}   # Bullet multiplies them
+        if soft is not None:   # the robots' soft contact (``PhysicsConfig.contact_stiffness``), as in a run
+            contact = {'restitution': 0.0, 'contactStiffness': soft[0], 'contactDamping': soft[1]}
+        for body in (moving, still):
+            c.changeDynamics(body, -1, lateralFriction=0.0, linearDamping=0.0, angularDamping=0.0,
+                             activationState=pybullet.ACTIVATION_STATE_DISABLE_SLEEPING, **contact)
         c.resetBaseVelocity(moving, [speed, 0.0, 0.0])
         overlap = 0.0
         steps = math.ceil((gap / speed + 0.03) / physics.time_step)   # the meeting and 30 ms after it

@@ -40,6 +40,9 @@ from .trouble import check_penetration, check_state
 
 #: Joint index of arm 1 and arm 2 (also their link indices); the body is link -1.
 ARM_JOINTS: tuple[int, int] = (0, 1)
+#: With soft contacts (``PhysicsConfig.contact_stiffness``) the plate's stiffness is this many times a robot
+#: link's: in series with the link's, the body-plate spring is the link's to 1 part in a million.
+SOFT_PLATE_STIFFNESS_FACTOR = 1.0e6
 
 
 @dataclass(frozen=True)
@@ -88,7 +91,8 @@ class Physics:
         configure_engine(c, ph, len(self.scene.robots))
         c.setGravity(0.0, 0.0, -ph.gravity)
         arm_friction, body_friction, plate_friction = ph.link_frictions()   # Bullet multiplies the pair's values
-        restitution = math.sqrt(ph.restitution)
+        soft = ph.soft_contact(self.config.robot.total_mass)
+        restitution = math.sqrt(ph.restitution) if soft is None else 0.0   # soft: the damping gives the rebound
         half = ph.plate_size / 2.0
         plate_shape = c.createCollisionShape(pybullet.GEOM_BOX,
                                              halfExtents=[half, half, ph.plate_thickness / 2.0])
@@ -102,6 +106,12 @@ class Physics:
             plate_restitution = ph.restitution_body_plate / restitution if restitution > 0.0 else 0.0
         c.changeDynamics(self.plate_id, -1, lateralFriction=plate_friction,
                          restitution=plate_restitution, rollingFriction=0.0, spinningFriction=0.0)
+        soft_links: dict[str, float] = {}
+        if soft is not None:
+            link_stiffness, link_damping, plate_damping = soft
+            soft_links = {'contactStiffness': link_stiffness, 'contactDamping': link_damping}
+            c.changeDynamics(self.plate_id, -1, contactStiffness=link_stiffness * SOFT_PLATE_STIFFNESS_FACTOR,
+                             contactDamping=plate_damping)
 
         w, d, h = spec.body_width, spec.body_depth, spec.body_height
         half_l = spec.arm_length / 2.0
@@ -134,10 +144,10 @@ class Physics:
             # applies the call's friction to the base instead of the link. So they go with the base only.
             c.changeDynamics(body, -1, lateralFriction=body_friction, restitution=restitution,
                              rollingFriction=0.0, spinningFriction=0.0, linearDamping=0.0, angularDamping=0.0,
-                             activationState=pybullet.ACTIVATION_STATE_DISABLE_SLEEPING)
+                             activationState=pybullet.ACTIVATION_STATE_DISABLE_SLEEPING, **soft_links)
             for link in ARM_JOINTS:
                 c.changeDynamics(body, link, lateralFriction=arm_friction, restitution=restitution,
-                                 rollingFriction=0.0, spinningFriction=0.0, jointDamping=0.0)
+                                 rollingFriction=0.0, spinningFriction=0.0, jointDamping=0.0, **soft_links)
             if ph.tilt_inertia_scale != 1.0:
                 ixx, iyy, izz = c.getDynamicsInfo(body, -1)[2]
                 c.changeDynamics(body, -1, localInertiaDiagonal=[ixx * ph.tilt_inertia_scale,

@@ -20,6 +20,13 @@ from .errors import ConfigError
 ARM_ENDS = ('square', 'round')
 
 
+#: Soft contacts (``PhysicsConfig.contact_stiffness``): the largest contact-spring angle per step (omega x
+#: time_step, omega = sqrt(k / (m / 2))) before Bullet's implicit integration takes more than 10 % of the
+#: rebound. Measured: an undamped contact rebounds with 0.90 at 0.034 rad per step, 0.77-0.79 at 0.08-0.09,
+#: 0.43 at 0.35 (docs/sim_calibration.md, "Soft contacts").
+SOFT_CONTACT_MAX_OMEGA_DT = 0.037
+
+
 class NotConvergedWarning(UserWarning):
     """A setting the simulation accepts but whose results are not converged in the time step."""
 
@@ -101,6 +108,14 @@ class PhysicsConfig:
     #: 6 of 30 trials have an isolated glider against 10 of 30 square (docs/sim_calibration.md, "Round
     #: arm ends").
     arm_ends: str = 'square'
+    #: Compliant robot-robot contacts, as in the authors' smooth-contact (penalty) Chrono model: the
+    #: stiffness (N/m) of a robot-robot contact. None: Bullet's rigid contacts (the restitution as a velocity
+    #: jump, overlaps pushed out by ``contact_erp``). If set, a robot-robot contact is a spring of this
+    #: stiffness with the damping that gives two whole robots meeting head on the ``restitution`` (reduced
+    #: mass m / 2), Bullet's restitution impulse is off and the body-plate contact is a critically damped
+    #: spring (Bullet cannot make one contact of a link soft and another rigid). Measured against the rigid
+    #: default in docs/sim_calibration.md, "Soft contacts".
+    contact_stiffness: float | None = None
 
     #: The sim's FSR reading is each face's contact force averaged over this time (s; a whole number of
     #: steps, at least one), so a collision kick reads its impulse / fsr_window at every time step instead
@@ -123,7 +138,7 @@ class PhysicsConfig:
                 raise ConfigError(f'PhysicsConfig.{name} must be an integer >= 1, got {value!r}')
         if self.friction_arm_arm is not None:
             require_positive(self, 'friction_arm_arm', error=ConfigError)
-        for name in ('servo_bandwidth',):
+        for name in ('servo_bandwidth', 'contact_stiffness'):
             if getattr(self, name) is not None:
                 require_positive(self, name, error=ConfigError)
         for name in ('restitution_velocity_threshold', 'restitution_body_plate'):
@@ -167,6 +182,27 @@ class PhysicsConfig:
         if self.servo_bandwidth is None:
             return self.position_gain
         return min(1.0, self.servo_bandwidth * self.time_step)
+
+    def soft_contact(self, robot_mass: float) -> tuple[float, float, float] | None:
+        """The Bullet contact values of ``contact_stiffness``: (stiffness, damping) of each robot link and the
+        plate's damping, or None for rigid contacts.
+
+        Bullet puts the two links' stiffnesses in series and adds their dampings, so each link gets twice
+        the pair's stiffness and half its damping. The pair's damping c = 2 zeta sqrt(k m / 2) with zeta =
+        -ln e / sqrt(pi^2 + ln^2 e) is that of a linear spring-dashpot whose rebound is the restitution e.
+        The body-plate contact is then a spring of the link's stiffness (in series with a far stiffer plate)
+        and the plate's damping makes it critically damped for one robot, so the robots rest on the plate
+        instead of bouncing on it.
+        """
+        if self.contact_stiffness is None:
+            return None
+        k = self.contact_stiffness
+        log_e = math.log(max(self.restitution, 1e-9))
+        zeta = -log_e / math.hypot(math.pi, log_e)
+        damping = 2.0 * zeta * math.sqrt(k * robot_mass / 2.0)
+        link_stiffness, link_damping = 2.0 * k, damping / 2.0
+        plate_damping = max(0.0, 2.0 * math.sqrt(link_stiffness * robot_mass) - link_damping)
+        return link_stiffness, link_damping, plate_damping
 
     def link_frictions(self) -> tuple[float, float, float]:
         """Return the (arm link, body link, plate) lateral friction values given to Bullet.
@@ -305,6 +341,15 @@ class SimConfig:
             raise ConfigError(f'PhysicsConfig.ccd_swept_sphere_radius: {ph.ccd_swept_sphere_radius!r} m is larger '
                               f'than half the arm thickness ({spec.arm_thickness / 2.0:.4g} m); the swept sphere '
                               'must fit inside the arm')
+        if ph.contact_stiffness is not None:
+            omega_dt = math.sqrt(ph.contact_stiffness / (spec.total_mass / 2.0)) * ph.time_step
+            if omega_dt > SOFT_CONTACT_MAX_OMEGA_DT:
+                warnings.warn(f'PhysicsConfig.contact_stiffness: {ph.contact_stiffness:g} N/m at a '
+                              f'{ph.time_step:.6g} s step is {omega_dt:.3f} rad of the contact spring per step; '
+                              'Bullet integrates it implicitly and loses about 3 x that of the rebound (more than '
+                              f'10 % above '
+                              f'{SOFT_CONTACT_MAX_OMEGA_DT}): the restitution set is not the one given '
+                              '(docs/sim_calibration.md, "Soft contacts")', NotConvergedWarning, stacklevel=3)
         if ph.servo_bandwidth is not None and ph.servo_bandwidth * ph.time_step > 0.5:
             warnings.warn(f'PhysicsConfig.servo_bandwidth: {ph.servo_bandwidth:g} /s at a {ph.time_step:.6g} s step '
                           f'is {ph.servo_bandwidth * ph.time_step:.2f} of the step; the servo converges only for '

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from smarticle_sim.impact import impact, impact_sweep, summary
-from smarticle_sim.settings import SimConfig
+from smarticle_sim.settings import NotConvergedWarning, SimConfig
 
 
 def test_the_contact_erp_adds_to_the_bounce_by_where_in_the_step_the_bodies_meet(config: SimConfig) -> None:
@@ -32,3 +32,13 @@ def test_impact_refuses_a_speed_or_gap_that_is_no_impact(config: SimConfig) -> N
             impact(config.physics, config.robot, speed, gap)
     with pytest.raises(ValueError, match='phases'):
         impact_sweep(config.physics, config.robot, phases=0)
+
+
+def test_soft_contacts_lose_their_rebound_to_the_integrator_unless_the_step_is_fine(config: SimConfig) -> None:
+    """An undamped contact spring (restitution 1) rebounds with 0.9 at 1e-4 s and with less than half at 1/960 s."""
+    with pytest.warns(NotConvergedWarning):
+        coarse = config.with_physics(contact_stiffness=2000.0, restitution=1.0)
+    fine = config.with_physics(contact_stiffness=2000.0, restitution=1.0, time_step=1e-4, control_tick=1 / 62.5)
+    at_fine = summary(impact_sweep(fine.physics, config.robot, speed=0.3, phases=4))
+    assert at_fine['mean'] == pytest.approx(0.90, abs=0.02) and at_fine['max'] - at_fine['min'] < 0.01
+    assert summary(impact_sweep(coarse.physics, config.robot, speed=0.3, phases=4))['max'] < 0.55

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import math
+import warnings
 
 import pytest
 
 from smarticle_common.gait import GaitConfig
 from smarticle_sim.errors import ConfigError
 from smarticle_sim.scenes import RobotPlacement, Scene, dense_scene
-from smarticle_sim.settings import PhysicsConfig, SimConfig
+from smarticle_sim.settings import NotConvergedWarning, PhysicsConfig, SimConfig
 from smarticle_sim.physics import ARM_JOINTS
 from smarticle_sim.runner import Runner
 
@@ -108,3 +109,37 @@ def test_round_arm_ends_keep_the_arm_and_round_its_end_edges(config: SimConfig) 
 def test_unknown_arm_ends_refused() -> None:
     with pytest.raises(ConfigError, match='arm_ends'):
         PhysicsConfig(arm_ends='oval')
+
+
+def test_soft_contacts_give_bullet_the_spring_and_the_damping_of_the_restitution(config: SimConfig) -> None:
+    """contact_stiffness k: each robot link 2k and half the pair's damping, whose spring-dashpot rebound is e."""
+    assert config.physics.soft_contact(config.robot.total_mass) is None   # rigid contacts by default
+    soft = config.with_physics(contact_stiffness=2000.0, restitution=0.85, time_step=1 / 10000,
+                               control_tick=1 / 62.5)
+    mass = soft.robot.total_mass
+    link_k, link_c, plate_c = soft.physics.soft_contact(mass)
+    pair_k, pair_c = 1.0 / (2.0 / link_k), 2.0 * link_c      # Bullet: stiffnesses in series, dampings added
+    assert pair_k == pytest.approx(2000.0)
+    zeta = pair_c / (2.0 * math.sqrt(pair_k * mass / 2.0))
+    assert math.exp(-zeta * math.pi / math.sqrt(1.0 - zeta ** 2)) == pytest.approx(0.85, rel=1e-9)
+    assert link_c + plate_c == pytest.approx(2.0 * math.sqrt(link_k * mass))   # body on the plate: critical
+    with Runner.with_gaits(soft, lone_robot()) as run:
+        c, body = run.physics.client, run.physics.body_ids[0]
+        for link in (-1, *ARM_JOINTS):
+            info = c.getDynamicsInfo(body, link)
+            assert (info[9], info[8], info[5]) == pytest.approx((link_k, link_c, 0.0))   # no restitution impulse
+        assert c.getDynamicsInfo(run.physics.plate_id, -1)[8] == pytest.approx(plate_c)
+        run.run(run.ticks_for(0.5))
+        state = run.physics.state()
+        assert state.positions[0, 2] == pytest.approx(config.robot.body_height / 2.0, abs=2e-4)   # on the plate
+        assert state.speed[0] < 0.05
+
+
+def test_soft_contacts_at_a_coarse_step_warn_with_the_field_named(config: SimConfig) -> None:
+    with pytest.warns(NotConvergedWarning, match='PhysicsConfig.contact_stiffness'):
+        config.with_physics(contact_stiffness=2000.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')
+        config.with_physics(contact_stiffness=2000.0, time_step=1 / 10000, control_tick=1 / 62.5)
+    with pytest.raises(ConfigError, match='contact_stiffness'):
+        PhysicsConfig(contact_stiffness=0.0)
