@@ -25,7 +25,7 @@ def test_defaults_are_the_converged_model_of_the_calibration() -> None:
     assert ph.time_step == pytest.approx(1.0 / 960.0) and ph.solver_iterations == 5
     assert ph.servo_bandwidth == 200.0 and ph.servo_gain() == pytest.approx(200.0 / 960.0)
     assert ph.fsr_window == pytest.approx(1.0 / 480.0) and ph.fsr_steps == 2
-    assert ph.restitution == 0.85 and ph.restitution_body_plate == 0.0
+    assert ph.restitution == 0.80 and ph.contact_erp == 0.1 and ph.restitution_body_plate == 0.0
     assert ph.restitution_velocity_threshold == 0.01
     assert ph.friction_arm_arm is None and ph.friction_robot_robot == ph.friction_body_plate == 0.3
     assert ph.ccd_swept_sphere_radius == 0.0 and ph.tilt_inertia_scale == 100.0
