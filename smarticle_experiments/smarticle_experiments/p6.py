@@ -438,15 +438,13 @@ def plot_lifetimes(trials: Sequence[PairTrial], path: Path, periods: float) -> P
 
 def physics_changes(parser: argparse.ArgumentParser, items: Sequence[str]) -> dict[str, Any]:
     """The ``--set NAME=VALUE`` items as PhysicsConfig changes; a bad name or value is a usage error naming it."""
-    from smarticle_experiments.physics_study import parse_value
+    from smarticle_experiments.assignments import parse_assignments
     from smarticle_sim.settings import SimConfig
 
-    changes: dict[str, Any] = {}
-    for item in items:
-        name, sep, value = item.partition('=')
-        if not sep or not name:
-            parser.error(f'--set {item!r}: expected NAME=VALUE')
-        changes[name.strip()] = parse_value(value.strip())
+    try:
+        changes = parse_assignments(items)
+    except ValueError as err:
+        parser.error(f'--set {err}')
     try:
         SimConfig.from_preset('feedback').with_physics(**changes)
     except (TypeError, ValueError) as err:   # an unknown field, or a value PhysicsConfig refuses

@@ -41,6 +41,7 @@ from smarticle_common.gait import GaitConfig
 from smarticle_common.pairs import one_pair
 from smarticle_common.runs import Recording
 
+from smarticle_experiments.assignments import parse_assignments
 from smarticle_sim.batch import run_trial
 from smarticle_sim.errors import SceneError
 from smarticle_sim.scenes import RobotPlacement, Scene, dense_scene, pair_scene
@@ -67,23 +68,6 @@ def make_config(overrides: dict[str, float] | None = None) -> SimConfig:
     if 'time_step' in physics and 'control_tick' not in physics:
         physics['time_step'] = 1.0 / round(1.0 / physics['time_step'])
     return replace(config, robot=replace(config.robot, **robot), physics=replace(config.physics, **physics))
-
-
-def parse_set(items: list[str]) -> dict[str, float]:
-    """``name=value`` strings to a dict (booleans as 0/1 stay floats, ints for integer fields)."""
-    out: dict[str, Any] = {}
-    for item in items:
-        name, _, value = item.partition('=')
-        if name in ('solver_iterations', 'trouble_every'):
-            out[name] = int(value)
-        elif value.lower() in ('true', 'false'):
-            out[name] = value.lower() == 'true'
-        elif '/' in value:
-            num, den = value.split('/')
-            out[name] = float(num) / float(den)
-        else:
-            out[name] = float(value)
-    return out
 
 
 def make_gait(config: SimConfig, alpha_deg: float, servo_speed: float | None,
@@ -493,7 +477,10 @@ def main() -> None:
     parser.add_argument('--procs', type=int, default=2)
     parser.add_argument('--set', action='append', default=[], metavar='NAME=VALUE')
     args = parser.parse_args()
-    args.overrides = parse_set(args.set)
+    try:
+        args.overrides = parse_assignments(args.set)
+    except ValueError as err:
+        parser.error(f'--set {err}')
     args.label = ' '.join(args.set) or 'defaults'
     if args.servo_speed:
         args.label += f' servo_speed={args.servo_speed}'

@@ -35,6 +35,7 @@ from smarticle_common.facts import GAIT_PERIOD, R_BIND_BL, RobotSpec
 from smarticle_common.gait import GaitConfig
 from smarticle_common.pairs import one_pair
 
+from smarticle_experiments.assignments import parse_assignments
 from smarticle_sim.errors import SceneError, SimTrouble
 from smarticle_sim.scenes import RobotPlacement, Scene, dense_scene, pair_scene
 from smarticle_sim.settings import PhysicsConfig, SimConfig
@@ -84,34 +85,12 @@ MODELS['proposed soft'] = {**MODELS['proposed'], 'restitution': 0.0, 'x_contact_
                            'x_contact_damping': 0.8}
 
 
-def parse_value(text: str) -> Any:
-    """'none' -> None, 'true'/'false' -> bool, 'a/b' -> a/b, ints stay int, numbers float, else the text."""
-    low = text.lower()
-    if low == 'none':
-        return None
-    if low in ('true', 'false'):
-        return low == 'true'
-    if text.count('/') == 1:
-        a, b = text.split('/')
-        try:
-            return float(a) / float(b)
-        except ValueError:
-            return text
-    for kind in (int, float):
-        try:
-            return kind(text)
-        except ValueError:
-            pass
-    return text
-
-
 def model_settings(name: str, sets: list[str] | None = None) -> dict[str, Any]:
     """The model's settings with ``name=value`` overrides."""
-    out = dict(MODELS[name])
-    for item in sets or []:
-        key, _, value = item.partition('=')
-        out[key] = parse_value(value)
-    return out
+    try:
+        return {**MODELS[name], **parse_assignments(sets or [])}
+    except ValueError as err:
+        raise SystemExit(f'--set {err}') from None
 
 
 def make_config(settings: dict[str, Any]) -> tuple[SimConfig, float, dict[str, Any]]:
