@@ -21,10 +21,10 @@ ARM_ENDS = ('square', 'round')
 
 
 #: Soft contacts (``PhysicsConfig.contact_stiffness``): the largest contact-spring angle per step (omega x
-#: time_step, omega = sqrt(k / (m / 2))) before Bullet's implicit integration takes more than 10 % of the
-#: rebound. Measured: an undamped contact rebounds with 0.90 at 0.034 rad per step, 0.77-0.79 at 0.08-0.09,
-#: 0.43 at 0.35 (docs/sim_calibration.md, "Soft contacts").
-SOFT_CONTACT_MAX_OMEGA_DT = 0.037
+#: time_step, omega = sqrt(k / (m / 2)) of one contact point) before Bullet's implicit integration takes
+#: about 10 % of the rebound. Measured: an undamped contact rebounds with 0.90 at 0.035 rad per step,
+#: 0.77-0.79 at 0.08-0.09, 0.43 at 0.35 (docs/sim_calibration.md, "Soft contacts").
+SOFT_CONTACT_MAX_OMEGA_DT = 0.03
 
 
 class NotConvergedWarning(UserWarning):
@@ -115,12 +115,13 @@ class PhysicsConfig:
     #: arm ends").
     arm_ends: str = 'square'
     #: Compliant robot-robot contacts, as in the authors' smooth-contact (penalty) Chrono model: the
-    #: stiffness (N/m) of a robot-robot contact. None: Bullet's rigid contacts (the restitution as a velocity
-    #: jump, overlaps pushed out by ``contact_erp``). If set, a robot-robot contact is a spring of this
-    #: stiffness with the damping that gives two whole robots meeting head on the ``restitution`` (reduced
-    #: mass m / 2), Bullet's restitution impulse is off and the body-plate contact is a critically damped
-    #: spring (Bullet cannot make one contact of a link soft and another rigid). Measured against the rigid
-    #: default in docs/sim_calibration.md, "Soft contacts".
+    #: stiffness (N/m) of a robot-robot contact point. None: Bullet's rigid contacts (the restitution as a
+    #: velocity jump, overlaps pushed out by ``contact_erp``). If set, each robot-robot contact point is a
+    #: spring of this stiffness with the damping that would give two whole robots meeting on one point the
+    #: ``restitution`` (reduced mass m / 2; a face-to-face contact has up to four points, so it is stiffer and
+    #: more damped), Bullet's restitution impulse is off, and the body-plate contact is a critically damped
+    #: spring whatever ``restitution_body_plate`` says (Bullet cannot make one contact of a link soft and
+    #: another rigid). Measured against the rigid default in docs/sim_calibration.md, "Soft contacts".
     contact_stiffness: float | None = None
 
     #: The sim's FSR reading is each face's contact force averaged over this time (s; a whole number of
@@ -352,9 +353,9 @@ class SimConfig:
             if omega_dt > SOFT_CONTACT_MAX_OMEGA_DT:
                 warnings.warn(f'PhysicsConfig.contact_stiffness: {ph.contact_stiffness:g} N/m at a '
                               f'{ph.time_step:.6g} s step is {omega_dt:.3f} rad of the contact spring per step; '
-                              'Bullet integrates it implicitly and loses about 3 x that of the rebound (more than '
-                              f'10 % above '
-                              f'{SOFT_CONTACT_MAX_OMEGA_DT}): the restitution set is not the one given '
+                              'Bullet integrates it implicitly and loses part of the rebound (about 10 % at 0.035, '
+                              f'57 % at 0.35; keep it under {SOFT_CONTACT_MAX_OMEGA_DT}): the restitution set is not '
+                              'the one given '
                               '(docs/sim_calibration.md, "Soft contacts")', NotConvergedWarning, stacklevel=3)
         if ph.servo_bandwidth is not None and ph.servo_bandwidth * ph.time_step > 0.5:
             warnings.warn(f'PhysicsConfig.servo_bandwidth: {ph.servo_bandwidth:g} /s at a {ph.time_step:.6g} s step '

@@ -36,10 +36,10 @@ def test_impact_refuses_a_speed_or_gap_that_is_no_impact(config: SimConfig) -> N
 
 
 def test_soft_contacts_lose_their_rebound_to_the_integrator_unless_the_step_is_fine(config: SimConfig) -> None:
-    """An undamped contact spring (restitution 1) rebounds with 0.9 at 1e-4 s and with less than half at 1/960 s."""
+    """An undamped contact spring (restitution 1) rebounds with 0.92 at 1/12000 s and with less than half at 1/960 s."""
     with pytest.warns(NotConvergedWarning):
         coarse = config.with_physics(contact_stiffness=2000.0, restitution=1.0)
-    fine = config.with_physics(contact_stiffness=2000.0, restitution=1.0, time_step=1e-4, control_tick=1 / 62.5)
+    fine = config.with_physics(contact_stiffness=2000.0, restitution=1.0, time_step=1 / 12000)
     at_fine = summary(impact_sweep(fine.physics, config.robot, speed=0.3, phases=4))
-    assert at_fine['mean'] == pytest.approx(0.90, abs=0.02) and at_fine['max'] - at_fine['min'] < 0.01
+    assert at_fine['mean'] == pytest.approx(0.92, abs=0.02) and at_fine['max'] - at_fine['min'] < 0.01
     assert summary(impact_sweep(coarse.physics, config.robot, speed=0.3, phases=4))['max'] < 0.55

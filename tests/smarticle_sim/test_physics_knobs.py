@@ -114,8 +114,7 @@ def test_unknown_arm_ends_refused() -> None:
 def test_soft_contacts_give_bullet_the_spring_and_the_damping_of_the_restitution(config: SimConfig) -> None:
     """contact_stiffness k: each robot link 2k and half the pair's damping, whose spring-dashpot rebound is e."""
     assert config.physics.soft_contact(config.robot.total_mass) is None   # rigid contacts by default
-    soft = config.with_physics(contact_stiffness=2000.0, restitution=0.85, time_step=1 / 10000,
-                               control_tick=1 / 62.5)
+    soft = config.with_physics(contact_stiffness=2000.0, restitution=0.85, time_step=1 / 12000)
     mass = soft.robot.total_mass
     link_k, link_c, plate_c = soft.physics.soft_contact(mass)
     pair_k, pair_c = 1.0 / (2.0 / link_k), 2.0 * link_c      # Bullet: stiffnesses in series, dampings added
@@ -140,6 +139,6 @@ def test_soft_contacts_at_a_coarse_step_warn_with_the_field_named(config: SimCon
         config.with_physics(contact_stiffness=2000.0)
     with warnings.catch_warnings():
         warnings.simplefilter('error')
-        config.with_physics(contact_stiffness=2000.0, time_step=1 / 10000, control_tick=1 / 62.5)
+        config.with_physics(contact_stiffness=2000.0, time_step=1 / 12000)
     with pytest.raises(ConfigError, match='contact_stiffness'):
         PhysicsConfig(contact_stiffness=0.0)
