@@ -103,7 +103,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--skip-p1', action='store_true')
     parser.add_argument('--skip-scale', action='store_true')
     parser.add_argument('--previous', action='store_true',
-                        help='P1 also at the previous default (1/480 s, 10 solver iterations), in the same run')
+                        help='P1 also at the previous default (1/480 s, 10 solver iterations, contact ERP 0.6, '
+                        'restitution 0.85), in the same run')
     parser.add_argument('--iterations', type=int, nargs='*', default=[],
                         help='P1 also with these solver iterations at the default step (batch core), in the same run')
     parser.add_argument('--out-dir', type=Path, default=None)
@@ -165,7 +166,7 @@ def main(argv: list[str] | None = None) -> int:
         fns = {'raw PyBullet loop': lambda: bare_loop(config, scene, p1_periods, clock),
                'Runner.run, no recording': lambda: runner_loop(config, scene, p1_periods, clock),
                'batch core, CLI defaults': lambda: batch_loop(config, scene, p1_periods, clock=clock)}
-        previous = config.with_physics(time_step=1.0 / 480.0, solver_iterations=10)
+        previous = config.with_physics(time_step=1.0 / 480.0, solver_iterations=10, contact_erp=0.6, restitution=0.85)
         if args.previous:
             fns['raw PyBullet loop, previous default'] = lambda: bare_loop(previous, scene, p1_periods, clock)
             fns['batch core, previous default'] = lambda: batch_loop(previous, scene, p1_periods, clock=clock)
