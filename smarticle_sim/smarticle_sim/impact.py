@@ -24,7 +24,7 @@ import numpy as np
 import pybullet
 from smarticle_common.facts import RobotSpec
 
-from smarticle_sim.physics import configure_engine, quiet_client
+from smarticle_sim.physics import configure_engine, quiet_client, robot_link_contact
 from smarticle_sim.settings import PhysicsConfig
 
 
@@ -50,10 +50,7 @@ def impact(physics: PhysicsConfig, spec: RobotSpec, speed: float = 0.3, gap: flo
         shape = c.createCollisionShape(pybullet.GEOM_BOX, halfExtents=half)
         moving = c.createMultiBody(spec.total_mass, shape, basePosition=[0.0, 0.0, 1.0])
         still = c.createMultiBody(spec.total_mass, shape, basePosition=[spec.body_width + gap, 0.0, 1.0])
-        soft = physics.soft_contact(spec.total_mass)
-        contact: dict[str, float] = {'restitution': math.sqrt(physics.restitution)}   # Bullet multiplies them
-        if soft is not None:   # the robots' soft contact (``PhysicsConfig.contact_stiffness``), as in a run
-            contact = {'restitution': 0.0, 'contactStiffness': soft[0], 'contactDamping': soft[1]}
+        contact = robot_link_contact(physics, spec.total_mass)   # as every robot link in a run
         for body in (moving, still):
             c.changeDynamics(body, -1, lateralFriction=0.0, linearDamping=0.0, angularDamping=0.0,
                              activationState=pybullet.ACTIVATION_STATE_DISABLE_SLEEPING, **contact)

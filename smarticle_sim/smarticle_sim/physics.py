@@ -91,8 +91,8 @@ class Physics:
         configure_engine(c, ph, len(self.scene.robots))
         c.setGravity(0.0, 0.0, -ph.gravity)
         arm_friction, body_friction, plate_friction = ph.link_frictions()   # Bullet multiplies the pair's values
-        soft = ph.soft_contact(self.config.robot.total_mass)
-        restitution = math.sqrt(ph.restitution) if soft is None else 0.0   # soft: the damping gives the rebound
+        link_contact = robot_link_contact(ph, spec.total_mass)
+        restitution = link_contact['restitution']
         half = ph.plate_size / 2.0
         plate_shape = c.createCollisionShape(pybullet.GEOM_BOX,
                                              halfExtents=[half, half, ph.plate_thickness / 2.0])
@@ -106,10 +106,9 @@ class Physics:
             plate_restitution = ph.restitution_body_plate / restitution if restitution > 0.0 else 0.0
         c.changeDynamics(self.plate_id, -1, lateralFriction=plate_friction,
                          restitution=plate_restitution, rollingFriction=0.0, spinningFriction=0.0)
-        soft_links: dict[str, float] = {}
+        soft = ph.soft_contact(spec.total_mass)
         if soft is not None:
-            link_stiffness, link_damping, plate_damping = soft
-            soft_links = {'contactStiffness': link_stiffness, 'contactDamping': link_damping}
+            link_stiffness, _, plate_damping = soft
             c.changeDynamics(self.plate_id, -1, contactStiffness=link_stiffness * SOFT_PLATE_STIFFNESS_FACTOR,
                              contactDamping=plate_damping)
 
@@ -142,12 +141,12 @@ class Physics:
                 linkJointTypes=[pybullet.JOINT_REVOLUTE] * 2, linkJointAxis=[[0, 0, -1], [0, 0, 1]])
             # Damping and activation state are whole-body properties: passed with a link index, PyBullet
             # applies the call's friction to the base instead of the link. So they go with the base only.
-            c.changeDynamics(body, -1, lateralFriction=body_friction, restitution=restitution,
+            c.changeDynamics(body, -1, lateralFriction=body_friction,
                              rollingFriction=0.0, spinningFriction=0.0, linearDamping=0.0, angularDamping=0.0,
-                             activationState=pybullet.ACTIVATION_STATE_DISABLE_SLEEPING, **soft_links)
+                             activationState=pybullet.ACTIVATION_STATE_DISABLE_SLEEPING, **link_contact)
             for link in ARM_JOINTS:
-                c.changeDynamics(body, link, lateralFriction=arm_friction, restitution=restitution,
-                                 rollingFriction=0.0, spinningFriction=0.0, jointDamping=0.0, **soft_links)
+                c.changeDynamics(body, link, lateralFriction=arm_friction,
+                                 rollingFriction=0.0, spinningFriction=0.0, jointDamping=0.0, **link_contact)
             if ph.tilt_inertia_scale != 1.0:
                 ixx, iyy, izz = c.getDynamicsInfo(body, -1)[2]
                 c.changeDynamics(body, -1, localInertiaDiagonal=[ixx * ph.tilt_inertia_scale,
@@ -497,6 +496,16 @@ class FsrReading:
         """Each face's largest reading since the previous call (None: no step since), and start over."""
         peak, self._peak = self._peak, None
         return peak
+
+
+def robot_link_contact(physics: PhysicsConfig, robot_mass: float) -> dict[str, float]:
+    """The ``changeDynamics`` contact values of every robot link: the restitution (Bullet multiplies the two
+    links' values, so each gets the square root), or, with soft contacts (``PhysicsConfig.soft_contact``),
+    no restitution impulse and the link's stiffness and damping."""
+    soft = physics.soft_contact(robot_mass)
+    if soft is None:
+        return {'restitution': math.sqrt(physics.restitution)}
+    return {'restitution': 0.0, 'contactStiffness': soft[0], 'contactDamping': soft[1]}
 
 
 def configure_engine(client: BulletClient, physics: PhysicsConfig, n_robots: int) -> None:
