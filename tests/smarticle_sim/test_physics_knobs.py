@@ -49,11 +49,11 @@ def test_non_positive_knobs_refused(field: str) -> None:
 def test_large_packs_get_more_solver_iterations(config: SimConfig, gait90: GaitConfig) -> None:
     """Above ``large_pack_robots`` robots Bullet is stepped with ``large_pack_iterations`` (never fewer)."""
     ph = PhysicsConfig()
-    assert (ph.large_pack_robots, ph.large_pack_iterations) == (7, 10)
-    assert [ph.iterations_for(n) for n in (1, 2, 7, 8, 50)] == [5, 5, 5, 10, 10]
-    assert PhysicsConfig(solver_iterations=20).iterations_for(50) == 20
+    assert (ph.large_pack_robots, ph.large_pack_iterations) == (7, 20)
+    assert [ph.iterations_for(n) for n in (1, 2, 7, 8, 50)] == [5, 5, 5, 20, 20]
+    assert PhysicsConfig(solver_iterations=30).iterations_for(50) == 30
     assert PhysicsConfig(large_pack_robots=100).iterations_for(50) == 5
-    for n, expected in ((7, 5), (8, 10)):
+    for n, expected in ((7, 5), (8, 20)):
         with Runner.with_gaits(config, dense_scene(config.robot, gait90, n, seed=1)) as run:
             assert run.physics.client.getPhysicsEngineParameters()['numSolverIterations'] == expected
     with pytest.raises(ConfigError, match='large_pack_iterations'):
