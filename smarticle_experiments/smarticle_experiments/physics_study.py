@@ -35,6 +35,7 @@ from smarticle_common.facts import GAIT_PERIOD, R_BIND_BL, RobotSpec
 from smarticle_common.gait import GaitConfig
 from smarticle_common.pairs import one_pair
 
+from smarticle_experiments import stats
 from smarticle_experiments.assignments import parse_assignments
 from smarticle_sim.errors import SceneError, SimTrouble
 from smarticle_sim.scenes import RobotPlacement, Scene, dense_scene, pair_scene
@@ -190,15 +191,12 @@ def read_csv(name: str) -> list[dict[str, str]]:
         return list(csv.DictReader(fh))
 
 
-def wilson(k: int, n: int, z: float = 1.96) -> tuple[float, float]:
-    """95 % Wilson score interval of a proportion k / n."""
+def wilson(k: int, n: int) -> tuple[float, float]:
+    """95 % Wilson interval (low, high) of a proportion k / n (``stats.wilson``); (0, 1) when n is 0."""
     if n == 0:
         return (0.0, 1.0)
-    p = k / n
-    den = 1 + z * z / n
-    centre = (p + z * z / (2 * n)) / den
-    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / den
-    return (max(0.0, centre - half), min(1.0, centre + half))
+    est = stats.wilson(k, n)
+    return (est.low, est.high)
 
 
 # ------------------------------------------------------------------ collision instrumentation
