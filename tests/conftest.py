@@ -28,6 +28,13 @@ def pytest_configure(config: pytest.Config) -> None:
     os.environ['PYTHONUNBUFFERED'] = '1'
 
 
+def pytest_unconfigure(config: pytest.Config) -> None:
+    """Release this run's DDS domain (its lock file) at the end of the run."""
+    reservation = config.stash.get(DOMAIN, None)
+    if reservation is not None:
+        reservation.close()
+
+
 @pytest.fixture
 def nodes(tmp_path: Path) -> Iterator[NodeProcesses]:
     """Start real node processes for a test; all are stopped afterwards (logs in tmp_path)."""
