@@ -31,7 +31,7 @@ import numpy as np
 from .spec import ExperimentSpec, Trial
 from .stats import Estimate, bootstrap_mean, kaplan_meier, wilson
 from .store import ResultStore, write_atomic
-from .trials import ensemble_msd, msd_beta
+from .trials import config_of, ensemble_msd, msd_beta
 
 
 @dataclass
@@ -518,7 +518,7 @@ def trouble_lines(ctx: Context) -> list[str]:
                and ctx.records[t.key].get('status') == 'ok' and (ctx.records[t.key].get('result') or {}).get('trouble')]
     lines = ['## Trials not in the statistics', '',
              f'{len(ctx.trials)} trials in the spec: {len(ctx.ok())} used, {len(trouble)} ended in sim trouble, '
-             f'{len(failed)} failed, {len(missing)} not run yet.', '']
+             f'{len(failed)} failed, {len(missing)} not run yet.', '', *margin_lines(ctx)]
     if trouble or failed:
         lines += ['| key | seed | grid point | what |', '| --- | ---: | --- | --- |']
         for t, rec in trouble:
@@ -527,6 +527,25 @@ def trouble_lines(ctx: Context) -> list[str]:
             lines.append(f'| {t.key} | {t.seed} | {dict(t.point)} | failed ({rec.get("error_kind")}): '
                          f'{str(rec.get("error", ""))[:160]} |')
     return lines
+
+
+def margin_lines(ctx: Context) -> list[str]:
+    """How close the trials that ran came to the trouble limits: the largest body tilt and the deepest contact
+    overlap seen at their trouble checks (trial results that carry them), or nothing."""
+    results = [(t, ctx.records[t.key].get('result') or {}) for t in ctx.trials
+               if t.key in ctx.records and ctx.records[t.key].get('status') == 'ok']
+    tilts = [(r['peak_tilt_deg'], t.seed) for t, r in results if r.get('peak_tilt_deg') is not None]
+    overlaps = [(r['peak_overlap_mm'], t.seed) for t, r in results if r.get('peak_overlap_mm') is not None]
+    if not tilts or not overlaps:
+        return []
+    ph = config_of(results[0][0].params).physics
+    tilt, tilt_seed = max(tilts)
+    overlap, overlap_seed = max(overlaps)
+    median_tilt = float(np.median([v for v, _ in tilts]))
+    return [f'Trouble margins over {len(tilts)} trials that ran (at their trouble checks): largest body tilt '
+            f'{tilt:.1f} deg (seed {tilt_seed}; median of the trials\' largest {median_tilt:.1f} deg; the limit '
+            f'is {math.degrees(ph.max_tilt):g} deg), deepest contact overlap {overlap:.2f} mm (seed {overlap_seed}; '
+            f'trouble is {ph.max_penetration * 1000:g} mm at {ph.penetration_checks} checks in a row).', '']
 
 
 def write_report(spec: ExperimentSpec, trials: list[Trial], store: ResultStore, code: Mapping[str, str]) -> Path:

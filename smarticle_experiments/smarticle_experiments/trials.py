@@ -83,7 +83,7 @@ def make_gait(config: SimConfig, alpha_max_deg: float, servo_speed: float | None
                                    phase=phase)
 
 
-def _config_of(p: Mapping[str, Any]) -> SimConfig:
+def config_of(p: Mapping[str, Any]) -> SimConfig:
     """SimConfig of a trial's parameters."""
     return make_config(str(p['preset']), dict(p.get('physics') or {}), dict(p.get('robot') or {}),
                        dict(p.get('noise') or {}))
@@ -131,6 +131,8 @@ def analyse_recording(config: SimConfig, rec: Recording, period: float, p: Mappi
     return {
         'periods_run': (len(rec.time) - 1) / per if len(rec.time) else 0.0,
         'trouble': rec.trouble,
+        'peak_tilt_deg': _finite(float(rec.meta.get('peak_tilt_deg', math.nan))),
+        'peak_overlap_mm': _finite(float(rec.meta.get('peak_overlap_mm', math.nan))),
         'n_gliders': len(gliders),
         'positive': any(g['lifetime_periods'] >= positive for g in gliders),
         'positive_isolated': any(g['lifetime_periods'] >= positive and g['isolated'] for g in gliders),
@@ -148,7 +150,7 @@ def analyse_recording(config: SimConfig, rec: Recording, period: float, p: Mappi
 
 def dense_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
     """P1/P2/P3: N robots densely packed, in phase (or jittered), for ``periods`` periods; its gliders."""
-    config = _config_of(p)
+    config = config_of(p)
     gait = make_gait(config, p['alpha_max_deg'], p['servo_speed'])
     scene = dense_scene(config.robot, gait, n=int(p['robots']), seed=seed, phase_jitter=float(p['phase_jitter']))
     watch = ContactPeriods(gait.period) if p.get('contacts') else None
@@ -179,7 +181,7 @@ def pair_start(p: Mapping[str, Any], seed: int) -> tuple[float, float, float]:
 
 def pair_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
     """P4/P5: two robots from pair coordinates; binding at the end, travel, and the pair's gliders."""
-    config = _config_of(p)
+    config = config_of(p)
     gait = make_gait(config, p['alpha_max_deg'], p['servo_speed'])
     r, theta, phi = pair_start(p, seed)
     start = {'r0_bl': r, 'theta0_deg': theta, 'phi0_deg': phi}
@@ -212,7 +214,7 @@ def pair_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
 
 def single_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
     """P7: one robot alone (heading drawn from the seed); drift per cycle in micrometres."""
-    config = _config_of(p)
+    config = config_of(p)
     gait = make_gait(config, p['alpha_max_deg'], p['servo_speed'])
     heading = float(np.random.default_rng(seed).uniform(-math.pi, math.pi))
     a = gait.alpha_max
@@ -347,7 +349,7 @@ def validate_params(kind: str, params: Mapping[str, Any]) -> None:
                 raise SpecError(f'params.start must be one of {", ".join(STARTS)}, got {params["start"]!r}')
             replace(NoiseConfig.none(), **noise_mapping(params.get('noise')))
             return
-        config = _config_of(params)
+        config = config_of(params)
         if kind == 'accuracy':
             make_config(str(params['preset']), {**dict(params.get('physics') or {}),
                                                 'time_step': 1.0 / float(params['rate_hz']),

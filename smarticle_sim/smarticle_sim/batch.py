@@ -84,9 +84,11 @@ def run_trial(config: SimConfig, scene: Scene, periods: float, sample_every: int
     ``DEFAULT_SAMPLE_RATE`` (20 Hz: every 3 ticks at the default 60 Hz control tick). Poses and arm
     angles are always recorded; FSR forces and robot-robot contacts only when asked (otherwise their
     arrays are zeros / False). A SimTrouble ends the trial early: the recording keeps every sample
-    taken so far and ``meta['trouble']`` says why. ``controllers`` adds controllers (e.g. feedback)
-    that act before the gait cores in every tick; they may record what they did themselves. ``stop`` (asked
-    after every tick) ends the trial early; the recording keeps the samples taken so far.
+    taken so far and ``meta['trouble']`` says why. ``meta['peak_tilt_deg']`` and ``meta['peak_overlap_mm']``
+    say how close the run came to the trouble limits (the largest tilt and the deepest overlap at the
+    trouble checks). ``controllers`` adds controllers (e.g. feedback) that act before the gait cores in
+    every tick; they may record what they did themselves. ``stop`` (asked after every tick) ends the trial
+    early; the recording keeps the samples taken so far.
     """
     if not (math.isfinite(periods) and periods > 0):
         raise SimError(f'periods must be > 0, got {periods!r}')
@@ -147,6 +149,8 @@ def run_trial(config: SimConfig, scene: Scene, periods: float, sample_every: int
         finally:
             if bar is not None:
                 bar.close()
+            meta['peak_tilt_deg'] = math.degrees(physics.peak_tilt)
+            meta['peak_overlap_mm'] = physics.peak_overlap * 1000.0
     fsr_out = fsrs[:taken] if record_fsr else np.zeros((taken, n, n_faces))
     contacts_out = touching[:taken] if record_contacts else np.zeros((taken, n, n), dtype=bool)
     return Recording(times[:taken].copy(), poses[:taken].copy(), arms[:taken].copy(), fsr_out.copy(),

@@ -72,6 +72,10 @@ class Physics:
         self._state: PhysicsState | None = None
         self._last_check: tuple[float, np.ndarray | None] = (0.0, None)
         self._deep_checks = 0          # trouble checks in a row with a contact deeper than max_penetration
+        #: The largest body tilt (rad) and the deepest contact overlap (m) seen at the trouble checks so
+        #: far: how close the run came to the trouble limits (``max_tilt``, ``max_penetration``).
+        self.peak_tilt = 0.0
+        self.peak_overlap = 0.0
         n = len(scene.robots)
         self._commands: list[list[tuple[float, float] | None]] = [[None, None] for _ in range(n)]
         self._build()
@@ -428,8 +432,12 @@ class Physics:
                 speed = np.zeros(self.n_robots)
             arms = np.zeros((self.n_robots, 2))
         self._last_check = (now, positions)
+        if tilt.size and np.isfinite(tilt).all():
+            self.peak_tilt = max(self.peak_tilt, float(tilt.max()))
         check_state(now, positions, tilt, speed, arms, self._physics, self.config.robot.body_height)
         robot, depth = self.max_penetration()
+        if depth == depth:
+            self.peak_overlap = max(self.peak_overlap, depth)
         self._deep_checks = check_penetration(now, robot, depth, self._physics, self._deep_checks)
 
     # ----------------------------------------------------------------- housekeeping

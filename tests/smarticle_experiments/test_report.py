@@ -25,7 +25,8 @@ def dense_result(seed: int) -> dict[str, Any]:
     positive = seed < 97
     gliders = [glider(300 if positive else 40, 'C1', 180.0, ongoing=positive, distance=2.8 + 0.2 * (seed % 2)),
                glider(60 + seed % 40, 'C2', 5.0)]
-    return {'periods_run': 300.0, 'trouble': '', 'n_gliders': 2, 'positive': positive, 'positive_isolated': positive,
+    return {'periods_run': 300.0, 'trouble': '', 'n_gliders': 2, 'peak_tilt_deg': 0.5 + seed / 100,
+            'peak_overlap_mm': 1.0 if seed != 7 else 3.5, 'positive': positive, 'positive_isolated': positive,
             'longest_periods': 300 if positive else 99, 'longest_class': 'C1', 'longest_distance_w': 2.9,
             'gliders': gliders, 'trajectory_bl': [[[0.0, 0.0], [1.0, 0.0]], [[0.1, 0.0], [1.1, 0.0]]],
             'trajectory_dt': 1.6}
@@ -54,6 +55,9 @@ def test_p1_report_puts_the_paper_inside_the_sims_intervals_and_lists_what_it_le
     assert 'Kaplan-Meier' in rows['P3 C2 median lifetime (periods, Kaplan-Meier)']
     assert '151 used, 0 ended in sim trouble, 1 failed, 1 not run yet' in report
     assert 'RuntimeError: boom' in report
+    assert ('Trouble margins over 151 trials that ran (at their trouble checks): largest body tilt 2.0 deg '
+            '(seed 150; median of the trials\' largest 1.2 deg; the limit is 25 deg), deepest contact overlap '
+            '3.50 mm (seed 7; trouble is 4 mm at 3 checks in a row)') in report
     for png in ('p1_longest', 'trajectories', 'configurations', 'lifetimes'):
         assert (store.folder / 'report-p1' / f'{png}.png').stat().st_size > 0
 

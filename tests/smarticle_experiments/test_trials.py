@@ -56,6 +56,14 @@ def test_a_dense_trial_reports_isolation_from_the_glider_analysis() -> None:
         assert g['isolated'] == (g['isolation'] >= 0.9)
 
 
+def test_a_dense_trial_says_how_close_it_came_to_the_trouble_limits() -> None:
+    """The largest tilt and deepest overlap at the trouble checks: small, positive, inside the limits."""
+    result = KINDS['dense'].function(params('dense', robots=3, periods=4.0, min_periods=1), 2)
+    assert result['trouble'] == ''
+    assert 0.0 <= result['peak_tilt_deg'] < 25.0
+    assert 0.0 < result['peak_overlap_mm'] < 4.0   # the bodies rest on the plate: a small overlap, never none
+
+
 def test_a_trial_with_noise_differs_and_repeats() -> None:
     """The spec's noise reaches the physics: seeded, so the same seed repeats, and it moves the robots."""
     base = params('dense', robots=3, periods=3.0, min_periods=1)
