@@ -43,7 +43,7 @@ from .trials import KINDS, NOISE_FIELDS, PHYSICS_FIELDS, ROBOT_FIELDS, noise_map
 
 #: The sections a spec's ``report`` may name (``report.SECTIONS`` draws each; a test keeps the two equal).
 REPORT_SECTIONS: tuple[str, ...] = ('p1', 'trajectories', 'configurations', 'lifetimes', 'basin', 'alpha_sweep',
-                                    'p6', 'drift', 'accuracy', 'contacts')
+                                    'p6', 'drift', 'accuracy', 'contacts', 'step_convergence')
 
 SPEC_KEYS: tuple[str, ...] = ('name', 'description', 'kind', 'store', 'preset', 'periods', 'physics', 'robot',
                               'noise', 'params', 'analysis', 'grid', 'seeds', 'report', 'paper')

@@ -108,3 +108,27 @@ def test_the_contacts_section_counts_touching_gliders(tmp_path: Path) -> None:
     assert '| C2 | 4 | 50% [' in report and '| 25% |' in report   # one trial's gliders never touched
     assert '| any | 100.0% [' in report and '| touching | 50.0% [' in report
     assert (store.folder / 'report-touch' / 'contacts.png').stat().st_size > 0
+
+
+def test_step_convergence_compares_each_step_with_the_finest(tmp_path: Path) -> None:
+    """A bound pair's r and travel per 100 periods against the time step; off by more than 10 % and outside
+    the intervals is not converged, the finest step is the reference."""
+    steps = [1 / 480, 1 / 960, 1 / 1920]
+    spec = spec_from_mapping({'name': 'conv', 'kind': 'pair', 'seeds': 6, 'report': ['step_convergence'],
+                              'grid': {'physics.time_step': steps}})
+    trials = spec.trials(CODE)
+    store = ResultStore(tmp_path / 'conv')
+    travel = {1 / 480: 2.0, 1 / 960: 3.85, 1 / 1920: 4.0}     # W per 100 periods
+    for t in trials:
+        dt = t.params['physics']['time_step']
+        g = {**glider(150, 'C1', 180.0), 'r_bl': 1.50 + 0.01 * (t.seed % 3),
+             'v_com_w_per_period': travel[dt] / 100.0 + 0.0005 * (t.seed % 3)}
+        store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': dict(t.point), 'status': 'ok',
+                     'result': {'trouble': '', 'gliders': [g]}})
+    report = write_report(spec, trials, store, CODE).read_text()
+    rows = {line.split(' | ')[0].lstrip('| '): line for line in report.splitlines() if line.startswith('| 1/')}
+    assert rows['1/1920 s'].endswith('| (reference) |')
+    assert '| -3.7% |' in rows['1/960 s'] and rows['1/960 s'].endswith('| yes |')
+    assert '| -49.4% |' in rows['1/480 s'] and rows['1/480 s'].endswith('| no |')
+    assert '| 6/6 |' in rows['1/480 s'] and '| +0.0% |' in rows['1/480 s']      # r is the same at every step
+    assert (store.folder / 'report-conv' / 'step_convergence.png').stat().st_size > 0
