@@ -370,27 +370,29 @@ CONVERGED_WITHIN = 0.10
 
 
 def section_step_convergence(ctx: Context) -> list[str]:
-    """A bound pair's mean r and travel per 100 periods against the time step (issue #11, item 1)."""
-    by_step: dict[float, list[dict[str, Any]]] = defaultdict(list)
-    trials_at: dict[float, int] = defaultdict(int)
+    """A bound pair's mean r and travel per 100 periods against the time step and the solver iterations (issue
+    #11, item 1); the reference is the finest step with the most iterations."""
+    by_step: dict[tuple[float, int], list[dict[str, Any]]] = defaultdict(list)
+    trials_at: dict[tuple[float, int], int] = defaultdict(int)
     for t, r in ctx.ok():
-        dt = config_of(t.params).physics.time_step
+        ph = config_of(t.params).physics
+        dt = (ph.time_step, ph.solver_iterations)
         trials_at[dt] += 1
         longest = max(r.get('gliders') or [], key=lambda g: g['lifetime_periods'], default=None)
         if longest is not None:
             by_step[dt].append(longest)
-    steps = sorted(trials_at, reverse=True)
+    steps = sorted(trials_at, key=lambda k: (-k[0], k[1]))
     if not steps:
         return ['No trials yet.']
-    figures: dict[str, dict[float, Estimate]] = {'r': {}, 'travel': {}}
+    figures: dict[str, dict[tuple[float, int], Estimate]] = {'r': {}, 'travel': {}}
     for dt in steps:
         gl = by_step.get(dt, [])
         figures['r'][dt] = bootstrap_mean([g['r_bl'] for g in gl if g['r_bl'] is not None])
         figures['travel'][dt] = bootstrap_mean([100.0 * g['v_com_w_per_period'] for g in gl
                                                 if g['v_com_w_per_period'] is not None])
-    finest = steps[-1]
+    finest = max(steps, key=lambda k: (-k[0], k[1]))
 
-    def off(name: str, dt: float) -> tuple[str, bool | None]:
+    def off(name: str, dt: tuple[float, int]) -> tuple[str, bool | None]:
         est, ref = figures[name][dt], figures[name][finest]
         if not (math.isfinite(est.value) and math.isfinite(ref.value)) or ref.value == 0.0:
             return 'n/a', None
@@ -398,31 +400,35 @@ def section_step_convergence(ctx: Context) -> list[str]:
         half = sum((e.high - e.low) / 2.0 for e in (est, ref) if math.isfinite(e.low) and math.isfinite(e.high))
         return f'{rel:+.1%}', abs(rel) <= CONVERGED_WITHIN or abs(est.value - ref.value) <= half
 
-    lines = ['| time step | pairs with a glider | glider mean r (BL) [95 %] | off the finest | '
+    lines = ['| time step | solver iterations | pairs with a glider | glider mean r (BL) [95 %] | off the finest | '
              'travel per 100 periods (W) [95 %] | off the finest | converged |',
-             '| --- | ---: | --- | ---: | --- | ---: | --- |']
+             '| --- | ---: | ---: | --- | ---: | --- | ---: | --- |']
     for dt in steps:
         r_off, r_ok = off('r', dt)
         v_off, v_ok = off('travel', dt)
         both = None if r_ok is None or v_ok is None else (r_ok and v_ok)
-        lines.append(f'| 1/{1.0 / dt:.0f} s | {len(by_step.get(dt, []))}/{trials_at[dt]} | '
+        lines.append(f'| 1/{1.0 / dt[0]:.0f} s | {dt[1]} | {len(by_step.get(dt, []))}/{trials_at[dt]} | '
                      f'{figures["r"][dt].text(".3f")} | {r_off} | {figures["travel"][dt].text(".2f")} | {v_off} | '
                      f'{_yes_no(both) if dt != finest else "(reference)"} |')
     fig = figure(9, 4)
     for k, (name, label) in enumerate((('r', 'glider mean r (BL)'), ('travel', 'travel per 100 periods (W)'))):
         ax = fig.add_subplot(1, 2, k + 1)
-        x = [1.0 / dt for dt in steps]
-        y = np.array([figures[name][dt].value for dt in steps])
-        err = np.array([[e.value - e.low if math.isfinite(e.low) else 0.0 for e in (figures[name][dt] for dt in steps)],
-                        [e.high - e.value if math.isfinite(e.high) else 0.0
-                         for e in (figures[name][dt] for dt in steps)]])
-        ax.errorbar(x, y, yerr=err, fmt='o-', capsize=3)
+        for n_iter in sorted({k[1] for k in steps}):
+            keys = [k for k in steps if k[1] == n_iter]
+            x = [1.0 / k[0] for k in keys]
+            y = np.array([figures[name][k].value for k in keys])
+            ests = [figures[name][k] for k in keys]
+            err = np.array([[e.value - e.low if math.isfinite(e.low) else 0.0 for e in ests],
+                            [e.high - e.value if math.isfinite(e.high) else 0.0 for e in ests]])
+            ax.errorbar(x, y, yerr=err, fmt='o-', capsize=3, label=f'{n_iter} solver iterations')
+        legend(ax, 7)
         ax.set_xscale('log', base=2)
         ax.set_xlabel('physics rate (1 / time step, Hz)')
         ax.set_ylabel(label)
     ctx.save(fig, 'step_convergence')
     return [f'Per pair: its longest glider (mean r over its periods; travel = its V_com x 100 periods). The '
-            f'reference is the finest step; converged = within {CONVERGED_WITHIN:.0%} of it or within the two '
+            f'reference is the finest step (with the most solver iterations there); converged = within '
+            f'{CONVERGED_WITHIN:.0%} of it or within the two '
             f'values\' combined 95 % half-widths, for both figures.', '', *lines, '',
             '![step convergence](step_convergence.png)']
 

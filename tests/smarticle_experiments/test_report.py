@@ -127,6 +127,7 @@ def test_step_convergence_compares_each_step_with_the_finest(tmp_path: Path) -> 
                      'result': {'trouble': '', 'gliders': [g]}})
     report = write_report(spec, trials, store, CODE).read_text()
     rows = {line.split(' | ')[0].lstrip('| '): line for line in report.splitlines() if line.startswith('| 1/')}
+    assert all(' | 5 | ' in row for row in rows.values())     # the default's solver iterations
     assert rows['1/1920 s'].endswith('| (reference) |')
     assert '| -3.7% |' in rows['1/960 s'] and rows['1/960 s'].endswith('| yes |')
     assert '| -49.4% |' in rows['1/480 s'] and rows['1/480 s'].endswith('| no |')
