@@ -372,28 +372,29 @@ CONVERGED_WITHIN = 0.10
 def section_step_convergence(ctx: Context) -> list[str]:
     """A bound pair's mean r and travel per 100 periods against the time step and the solver iterations (issue
     #11, item 1); the reference is the finest step with the most iterations."""
-    by_step: dict[tuple[float, int], list[dict[str, Any]]] = defaultdict(list)
+    # a setting = (time step, solver iterations); sorted coarse to fine, so the last is the reference
+    by_setting: dict[tuple[float, int], list[dict[str, Any]]] = defaultdict(list)
     trials_at: dict[tuple[float, int], int] = defaultdict(int)
     for t, r in ctx.ok():
         ph = config_of(t.params).physics
-        dt = (ph.time_step, ph.solver_iterations)
-        trials_at[dt] += 1
+        setting = (ph.time_step, ph.solver_iterations)
+        trials_at[setting] += 1
         longest = max(r.get('gliders') or [], key=lambda g: g['lifetime_periods'], default=None)
         if longest is not None:
-            by_step[dt].append(longest)
-    steps = sorted(trials_at, key=lambda k: (-k[0], k[1]))
-    if not steps:
+            by_setting[setting].append(longest)
+    settings = sorted(trials_at, key=lambda s: (-s[0], s[1]))
+    if not settings:
         return ['No trials yet.']
     figures: dict[str, dict[tuple[float, int], Estimate]] = {'r': {}, 'travel': {}}
-    for dt in steps:
-        gl = by_step.get(dt, [])
-        figures['r'][dt] = bootstrap_mean([g['r_bl'] for g in gl if g['r_bl'] is not None])
-        figures['travel'][dt] = bootstrap_mean([100.0 * g['v_com_w_per_period'] for g in gl
-                                                if g['v_com_w_per_period'] is not None])
-    finest = max(steps, key=lambda k: (-k[0], k[1]))
+    for setting in settings:
+        gl = by_setting.get(setting, [])
+        figures['r'][setting] = bootstrap_mean([g['r_bl'] for g in gl if g['r_bl'] is not None])
+        figures['travel'][setting] = bootstrap_mean([100.0 * g['v_com_w_per_period'] for g in gl
+                                                     if g['v_com_w_per_period'] is not None])
+    finest = settings[-1]
 
-    def off(name: str, dt: tuple[float, int]) -> tuple[str, bool | None]:
-        est, ref = figures[name][dt], figures[name][finest]
+    def off(name: str, setting: tuple[float, int]) -> tuple[str, bool | None]:
+        est, ref = figures[name][setting], figures[name][finest]
         if not (math.isfinite(est.value) and math.isfinite(ref.value)) or ref.value == 0.0:
             return 'n/a', None
         rel = (est.value - ref.value) / abs(ref.value)
@@ -403,24 +404,24 @@ def section_step_convergence(ctx: Context) -> list[str]:
     lines = ['| time step | solver iterations | pairs with a glider | glider mean r (BL) [95 %] | off the finest | '
              'travel per 100 periods (W) [95 %] | off the finest | converged |',
              '| --- | ---: | ---: | --- | ---: | --- | ---: | --- |']
-    for dt in steps:
-        r_off, r_ok = off('r', dt)
-        v_off, v_ok = off('travel', dt)
+    for setting in settings:
+        r_off, r_ok = off('r', setting)
+        v_off, v_ok = off('travel', setting)
         both = None if r_ok is None or v_ok is None else (r_ok and v_ok)
-        lines.append(f'| 1/{1.0 / dt[0]:.0f} s | {dt[1]} | {len(by_step.get(dt, []))}/{trials_at[dt]} | '
-                     f'{figures["r"][dt].text(".3f")} | {r_off} | {figures["travel"][dt].text(".2f")} | {v_off} | '
-                     f'{_yes_no(both) if dt != finest else "(reference)"} |')
+        lines.append(f'| 1/{1.0 / setting[0]:.0f} s | {setting[1]} | {len(by_setting.get(setting, []))}/'
+                     f'{trials_at[setting]} | {figures["r"][setting].text(".3f")} | {r_off} | '
+                     f'{figures["travel"][setting].text(".2f")} | {v_off} | '
+                     f'{_yes_no(both) if setting != finest else "(reference)"} |')
     fig = figure(9, 4)
-    for k, (name, label) in enumerate((('r', 'glider mean r (BL)'), ('travel', 'travel per 100 periods (W)'))):
-        ax = fig.add_subplot(1, 2, k + 1)
-        for n_iter in sorted({k[1] for k in steps}):
-            keys = [k for k in steps if k[1] == n_iter]
-            x = [1.0 / k[0] for k in keys]
-            y = np.array([figures[name][k].value for k in keys])
-            ests = [figures[name][k] for k in keys]
+    for panel, (name, label) in enumerate((('r', 'glider mean r (BL)'), ('travel', 'travel per 100 periods (W)'))):
+        ax = fig.add_subplot(1, 2, panel + 1)
+        for n_iter in sorted({s[1] for s in settings}):
+            same = [s for s in settings if s[1] == n_iter]
+            ests = [figures[name][s] for s in same]
             err = np.array([[e.value - e.low if math.isfinite(e.low) else 0.0 for e in ests],
                             [e.high - e.value if math.isfinite(e.high) else 0.0 for e in ests]])
-            ax.errorbar(x, y, yerr=err, fmt='o-', capsize=3, label=f'{n_iter} solver iterations')
+            ax.errorbar([1.0 / s[0] for s in same], [e.value for e in ests], yerr=err, fmt='o-', capsize=3,
+                        label=f'{n_iter} solver iterations')
         legend(ax, 7)
         ax.set_xscale('log', base=2)
         ax.set_xlabel('physics rate (1 / time step, Hz)')
