@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from smarticle_sim.settings import BULLET_SOLVER_RESIDUAL_THRESHOLD
 
 from .spec import ExperimentSpec, Trial
 from .stats import Estimate, bootstrap_mean, kaplan_meier, wilson
@@ -370,22 +371,28 @@ CONVERGED_WITHIN = 0.10
 
 
 def section_step_convergence(ctx: Context) -> list[str]:
-    """A bound pair's mean r and travel per 100 periods against the time step and the solver iterations (issue
-    #11, item 1); the reference is the finest step with the most iterations."""
-    # a setting = (time step, solver iterations); sorted coarse to fine, so the last is the reference
-    by_setting: dict[tuple[float, int], list[dict[str, Any]]] = defaultdict(list)
-    trials_at: dict[tuple[float, int], int] = defaultdict(int)
+    """A bound pair's mean r and travel per 100 periods against the time step, the solver iterations and the
+    solver's residual threshold (issue #11, item 1); the reference is the finest step with the most iterations
+    and the strictest threshold."""
+    # a setting = (time step, solver iterations, residual threshold); sorted coarse to loose, fine to strict,
+    # so the last is the reference
+    Setting = tuple[float, int, float]
+    by_setting: dict[Setting, list[dict[str, Any]]] = defaultdict(list)
+    trials_at: dict[Setting, int] = defaultdict(int)
     for t, r in ctx.ok():
         ph = config_of(t.params).physics
-        setting = (ph.time_step, ph.solver_iterations)
+        threshold = ph.solver_residual_threshold
+        if threshold is None:
+            threshold = BULLET_SOLVER_RESIDUAL_THRESHOLD
+        setting = (ph.time_step, ph.solver_iterations, threshold)
         trials_at[setting] += 1
         longest = max(r.get('gliders') or [], key=lambda g: g['lifetime_periods'], default=None)
         if longest is not None:
             by_setting[setting].append(longest)
-    settings = sorted(trials_at, key=lambda s: (-s[0], s[1]))
+    settings = sorted(trials_at, key=lambda s: (-s[0], s[1], -s[2]))
     if not settings:
         return ['No trials yet.']
-    figures: dict[str, dict[tuple[float, int], Estimate]] = {'r': {}, 'travel': {}}
+    figures: dict[str, dict[Setting, Estimate]] = {'r': {}, 'travel': {}}
     for setting in settings:
         gl = by_setting.get(setting, [])
         figures['r'][setting] = bootstrap_mean([g['r_bl'] for g in gl if g['r_bl'] is not None])
@@ -393,7 +400,7 @@ def section_step_convergence(ctx: Context) -> list[str]:
                                                      if g['v_com_w_per_period'] is not None])
     finest = settings[-1]
 
-    def off(name: str, setting: tuple[float, int]) -> tuple[str, bool | None]:
+    def off(name: str, setting: Setting) -> tuple[str, bool | None]:
         est, ref = figures[name][setting], figures[name][finest]
         if not (math.isfinite(est.value) and math.isfinite(ref.value)) or ref.value == 0.0:
             return 'n/a', None
@@ -401,36 +408,38 @@ def section_step_convergence(ctx: Context) -> list[str]:
         half = sum((e.high - e.low) / 2.0 for e in (est, ref) if math.isfinite(e.low) and math.isfinite(e.high))
         return f'{rel:+.1%}', abs(rel) <= CONVERGED_WITHIN or abs(est.value - ref.value) <= half
 
-    lines = ['| time step | solver iterations | pairs with a glider | glider mean r (BL) [95 %] | off the finest | '
-             'travel per 100 periods (W) [95 %] | off the finest | converged |',
-             '| --- | ---: | ---: | --- | ---: | --- | ---: | --- |']
+    lines = ['| time step | solver iterations | residual threshold | pairs with a glider | glider mean r (BL) [95 %] | '
+             'off the finest | travel per 100 periods (W) [95 %] | off the finest | converged |',
+             '| --- | ---: | ---: | ---: | --- | ---: | --- | ---: | --- |']
     for setting in settings:
         r_off, r_ok = off('r', setting)
         v_off, v_ok = off('travel', setting)
         both = None if r_ok is None or v_ok is None else (r_ok and v_ok)
-        lines.append(f'| 1/{1.0 / setting[0]:.0f} s | {setting[1]} | {len(by_setting.get(setting, []))}/'
-                     f'{trials_at[setting]} | {figures["r"][setting].text(".3f")} | {r_off} | '
-                     f'{figures["travel"][setting].text(".2f")} | {v_off} | '
+        lines.append(f'| 1/{1.0 / setting[0]:.0f} s | {setting[1]} | {setting[2]:.0e} | '
+                     f'{len(by_setting.get(setting, []))}/{trials_at[setting]} | {figures["r"][setting].text(".3f")} | '
+                     f'{r_off} | {figures["travel"][setting].text(".2f")} | {v_off} | '
                      f'{_yes_no(both) if setting != finest else "(reference)"} |')
     fig = figure(9, 4)
     for panel, (name, label) in enumerate((('r', 'glider mean r (BL)'), ('travel', 'travel per 100 periods (W)'))):
         ax = fig.add_subplot(1, 2, panel + 1)
-        for n_iter in sorted({s[1] for s in settings}):
-            same = [s for s in settings if s[1] == n_iter]
+        for solver in sorted({s[1:] for s in settings}, key=lambda v: (v[0], -v[1])):
+            same = [s for s in settings if s[1:] == solver]
             ests = [figures[name][s] for s in same]
             err = np.array([[e.value - e.low if math.isfinite(e.low) else 0.0 for e in ests],
                             [e.high - e.value if math.isfinite(e.high) else 0.0 for e in ests]])
+            residual = '' if solver[1] == BULLET_SOLVER_RESIDUAL_THRESHOLD else f', residual {solver[1]:.0e}'
             ax.errorbar([1.0 / s[0] for s in same], [e.value for e in ests], yerr=err, fmt='o-', capsize=3,
-                        label=f'{n_iter} solver iterations')
+                        label=f'{solver[0]} solver iterations{residual}')
         legend(ax, 7)
         ax.set_xscale('log', base=2)
         ax.set_xlabel('physics rate (1 / time step, Hz)')
         ax.set_ylabel(label)
     ctx.save(fig, 'step_convergence')
     return [f'Per pair: its longest glider (mean r over its periods; travel = its V_com x 100 periods). The '
-            f'reference is the finest step (with the most solver iterations there); converged = within '
-            f'{CONVERGED_WITHIN:.0%} of it or within the two '
-            f'values\' combined 95 % half-widths, for both figures.', '', *lines, '',
+            f'reference is the finest step (with the most solver iterations and the strictest residual threshold '
+            f'there); converged = within {CONVERGED_WITHIN:.0%} of it or within the two '
+            f'values\' combined 95 % half-widths, for both figures. Residual threshold: Bullet\'s '
+            f'solverResidualThreshold ({BULLET_SOLVER_RESIDUAL_THRESHOLD:.0e} is its own default).', '', *lines, '',
             '![step convergence](step_convergence.png)']
 
 

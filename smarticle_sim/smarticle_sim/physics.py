@@ -518,8 +518,8 @@ def robot_link_contact(physics: PhysicsConfig, robot_mass: float) -> dict[str, f
 
 def configure_engine(client: BulletClient, physics: PhysicsConfig, n_robots: int) -> None:
     """Give the engine the ``physics`` settings for a scene of ``n_robots`` robots: step, solver iterations
-    (``PhysicsConfig.iterations_for``), deterministic pair order, contact breaking threshold, contact ERP and
-    restitution velocity threshold."""
+    (``PhysicsConfig.iterations_for``) and their residual threshold, deterministic pair order, contact breaking
+    threshold, contact ERP and restitution velocity threshold."""
     client.setPhysicsEngineParameter(fixedTimeStep=physics.time_step,
                                      numSolverIterations=physics.iterations_for(n_robots),
                                      numSubSteps=0, deterministicOverlappingPairs=1,
@@ -527,6 +527,8 @@ def configure_engine(client: BulletClient, physics: PhysicsConfig, n_robots: int
                                      contactERP=physics.contact_erp)
     if physics.restitution_velocity_threshold is not None:
         client.setPhysicsEngineParameter(restitutionVelocityThreshold=physics.restitution_velocity_threshold)
+    if physics.solver_residual_threshold is not None:
+        client.setPhysicsEngineParameter(solverResidualThreshold=physics.solver_residual_threshold)
 
 
 def quiet_client() -> BulletClient:

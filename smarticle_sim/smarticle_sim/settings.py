@@ -25,6 +25,9 @@ ARM_ENDS = ('square', 'round')
 #: about 10 % of the rebound. Measured: an undamped contact rebounds with 0.90 at 0.035 rad per step,
 #: 0.77-0.79 at 0.08-0.09, 0.43 at 0.35 (docs/sim_calibration.md, "Soft contacts").
 SOFT_CONTACT_MAX_OMEGA_DT = 0.03
+#: Bullet's own solver residual threshold (PyBullet's physics server sets it), what
+#: ``PhysicsConfig.solver_residual_threshold`` None leaves in place.
+BULLET_SOLVER_RESIDUAL_THRESHOLD = 1e-7
 
 
 class NotConvergedWarning(UserWarning):
@@ -58,6 +61,11 @@ class PhysicsConfig:
     #: (0 stops in 201 dense trials), so the rule starts above it.
     large_pack_robots: int = 7
     large_pack_iterations: int = 20
+    #: Bullet's solver residual threshold (``solverResidualThreshold``): the solver stops iterating early
+    #: once the largest squared velocity change (m^2/s^2) any constraint row got in an iteration is at or
+    #: below it, so ``solver_iterations`` becomes a cap. None: Bullet's own 1e-7 (a velocity change of 0.3
+    #: mm/s, ``BULLET_SOLVER_RESIDUAL_THRESHOLD``), which in contact rarely stops the solver before the cap.
+    solver_residual_threshold: float | None = None
     contact_breaking_threshold: float = 0.002   # m; Bullet's default 0.02 is far larger than the robots' gaps
     gravity: float = 9.81
     friction_body_plate: float = 0.30           # the authors' Chrono model (0.3-0.37)
@@ -146,7 +154,7 @@ class PhysicsConfig:
                 raise ConfigError(f'PhysicsConfig.{name} must be an integer >= 1, got {value!r}')
         if self.friction_arm_arm is not None:
             require_positive(self, 'friction_arm_arm', error=ConfigError)
-        for name in ('servo_bandwidth', 'contact_stiffness'):
+        for name in ('servo_bandwidth', 'contact_stiffness', 'solver_residual_threshold'):
             if getattr(self, name) is not None:
                 require_positive(self, name, error=ConfigError)
         for name in ('restitution_velocity_threshold', 'restitution_body_plate'):
