@@ -87,6 +87,15 @@ def best_of(fns: dict[str, Callable[[], tuple[int, float]]], repeats: int, clock
     return best
 
 
+def solver_setting(text: str) -> tuple[int, float | None]:
+    """'N' -> (N, None): N solver iterations at Bullet's residual threshold; 'N:T' -> (N, T)."""
+    iterations, _, threshold = text.partition(':')
+    try:
+        return int(iterations), (float(threshold) if threshold else None)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'expected N or N:THRESHOLD, got {text!r}') from None
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run both parts, print tables, write CSV and PNG."""
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -105,8 +114,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--previous', action='store_true',
                         help='P1 also at the previous default (1/480 s, 10 solver iterations, contact ERP 0.6, '
                         'restitution 0.85), in the same run')
-    parser.add_argument('--iterations', type=int, nargs='*', default=[],
-                        help='P1 also with these solver iterations at the default step (batch core), in the same run')
+    parser.add_argument('--iterations', type=solver_setting, nargs='*', default=[],
+                        help='P1 also with these solver settings at the default step (batch core), in the same run: '
+                             'N (iterations) or N:T (a cap of N iterations with residual threshold T, e.g. 20:1e-5)')
     parser.add_argument('--out-dir', type=Path, default=None)
     parser.add_argument('--no-progress', action='store_true')
     add_clock_argument(parser)
@@ -170,10 +180,12 @@ def main(argv: list[str] | None = None) -> int:
         if args.previous:
             fns['raw PyBullet loop, previous default'] = lambda: bare_loop(previous, scene, p1_periods, clock)
             fns['batch core, previous default'] = lambda: batch_loop(previous, scene, p1_periods, clock=clock)
-        for n_iter in args.iterations:
-            iterated = config.with_physics(solver_iterations=n_iter)
-            fns[f'batch core, {n_iter} solver iterations'] = (
-                lambda cfg=iterated: batch_loop(cfg, scene, p1_periods, clock=clock))
+        for n_iter, threshold in args.iterations:
+            iterated = config.with_physics(solver_iterations=n_iter, solver_residual_threshold=threshold)
+            label = f'batch core, {n_iter} solver iterations'
+            if threshold is not None:
+                label += f', residual {threshold:g}'
+            fns[label] = lambda cfg=iterated: batch_loop(cfg, scene, p1_periods, clock=clock)
         best = best_of(fns, repeats, clock, progress, 'P1')
         p1 = []
         for k, (s, w, i) in best.items():

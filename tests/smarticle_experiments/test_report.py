@@ -127,9 +127,30 @@ def test_step_convergence_compares_each_step_with_the_finest(tmp_path: Path) -> 
                      'result': {'trouble': '', 'gliders': [g]}})
     report = write_report(spec, trials, store, CODE).read_text()
     rows = {line.split(' | ')[0].lstrip('| '): line for line in report.splitlines() if line.startswith('| 1/')}
-    assert all(' | 5 | ' in row for row in rows.values())     # the default's solver iterations
+    assert all(' | 10 | 1e-07 | ' in row for row in rows.values())    # the default's solver and Bullet's threshold
     assert rows['1/1920 s'].endswith('| (reference) |')
     assert '| -3.7% |' in rows['1/960 s'] and rows['1/960 s'].endswith('| yes |')
     assert '| -49.4% |' in rows['1/480 s'] and rows['1/480 s'].endswith('| no |')
     assert '| 6/6 |' in rows['1/480 s'] and '| +0.0% |' in rows['1/480 s']      # r is the same at every step
     assert (store.folder / 'report-conv' / 'step_convergence.png').stat().st_size > 0
+
+
+def test_step_convergence_takes_the_strictest_residual_threshold_as_the_reference(tmp_path: Path) -> None:
+    """At one step and one iteration cap, a solver that stops early (a residual threshold) is compared with
+    the one that does not (Bullet's own threshold), which is the reference."""
+    spec = spec_from_mapping({'name': 'early', 'kind': 'pair', 'seeds': 4, 'report': ['step_convergence'],
+                              'grid': {'physics.solver_residual_threshold': [1e-4, 1e-5]}})
+    extra = spec_from_mapping({'name': 'early', 'kind': 'pair', 'seeds': 4, 'report': ['step_convergence']})
+    trials = spec.trials(CODE) + extra.trials(CODE)
+    store = ResultStore(tmp_path / 'early')
+    travel = {1e-4: 4.0, 1e-5: 3.1, None: 3.0}
+    for t in trials:
+        threshold = t.params.get('physics', {}).get('solver_residual_threshold')
+        g = {**glider(150, 'C1', 180.0), 'r_bl': 1.50, 'v_com_w_per_period': travel[threshold] / 100.0}
+        store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': dict(t.point), 'status': 'ok',
+                     'result': {'trouble': '', 'gliders': [g]}})
+    report = write_report(spec, trials, store, CODE).read_text()
+    rows = [line for line in report.splitlines() if line.startswith('| 1/960 s')]
+    assert [row.split(' | ')[2] for row in rows] == ['1e-04', '1e-05', '1e-07']
+    assert rows[0].endswith('| no |') and '| +33.3% |' in rows[0]
+    assert rows[1].endswith('| yes |') and rows[2].endswith('| (reference) |')

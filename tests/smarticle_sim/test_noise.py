@@ -113,8 +113,9 @@ def test_cli_noise_options() -> None:
 # ------------------------------------------------------------------------------- zero noise, seeds
 def test_zero_noise_is_the_pre_noise_trajectory_bit_for_bit(config: SimConfig) -> None:
     # the hash was taken before noise existed, at the default of then (1/480 s, 10 solver iterations,
-    # contact ERP 0.6 with restitution 0.85)
-    config = config.with_physics(time_step=1.0 / 480.0, solver_iterations=10, contact_erp=0.6, restitution=0.85)
+    # contact ERP 0.6 with restitution 0.85, roll / pitch inertia x100)
+    config = config.with_physics(time_step=1.0 / 480.0, solver_iterations=10, contact_erp=0.6, restitution=0.85,
+                                 tilt_inertia_scale=100.0)
     assert poses_hash(config) == PRE_NOISE_POSES_SHA256
     zeros = NoiseConfig(clock_rate_sd=0.0, servo_jitter=0.0, friction_sd=0.0, friction_length=0.3, seed=11)
     assert poses_hash(config.with_noise(zeros)) == PRE_NOISE_POSES_SHA256

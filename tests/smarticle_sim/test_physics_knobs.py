@@ -10,7 +10,7 @@ import pytest
 from smarticle_common.gait import GaitConfig
 from smarticle_sim.errors import ConfigError
 from smarticle_sim.scenes import RobotPlacement, Scene, dense_scene
-from smarticle_sim.settings import NotConvergedWarning, PhysicsConfig, SimConfig
+from smarticle_sim.settings import BULLET_SOLVER_RESIDUAL_THRESHOLD, NotConvergedWarning, PhysicsConfig, SimConfig
 from smarticle_sim.physics import ARM_JOINTS
 from smarticle_sim.runner import Runner
 
@@ -22,13 +22,13 @@ def lone_robot() -> Scene:
 
 def test_defaults_are_the_converged_model_of_the_calibration() -> None:
     ph = PhysicsConfig()
-    assert ph.time_step == pytest.approx(1.0 / 960.0) and ph.solver_iterations == 5
+    assert ph.time_step == pytest.approx(1.0 / 960.0) and ph.solver_iterations == 10
     assert ph.servo_bandwidth == 200.0 and ph.servo_gain() == pytest.approx(200.0 / 960.0)
     assert ph.fsr_window == pytest.approx(1.0 / 480.0) and ph.fsr_steps == 2
     assert ph.restitution == 0.80 and ph.contact_erp == 0.1 and ph.restitution_body_plate == 0.0
     assert ph.restitution_velocity_threshold == 0.01
     assert ph.friction_arm_arm is None and ph.friction_robot_robot == ph.friction_body_plate == 0.3
-    assert ph.ccd_swept_sphere_radius == 0.0 and ph.tilt_inertia_scale == 100.0
+    assert ph.ccd_swept_sphere_radius == 0.0 and ph.tilt_inertia_scale == 1.0
     old = PhysicsConfig(servo_bandwidth=None)
     assert old.servo_gain() == old.position_gain          # the per-step gain of the old servo loop
 
@@ -50,10 +50,10 @@ def test_large_packs_get_more_solver_iterations(config: SimConfig, gait90: GaitC
     """Above ``large_pack_robots`` robots Bullet is stepped with ``large_pack_iterations`` (never fewer)."""
     ph = PhysicsConfig()
     assert (ph.large_pack_robots, ph.large_pack_iterations) == (7, 20)
-    assert [ph.iterations_for(n) for n in (1, 2, 7, 8, 50)] == [5, 5, 5, 20, 20]
+    assert [ph.iterations_for(n) for n in (1, 2, 7, 8, 50)] == [10, 10, 10, 20, 20]
     assert PhysicsConfig(solver_iterations=30).iterations_for(50) == 30
-    assert PhysicsConfig(large_pack_robots=100).iterations_for(50) == 5
-    for n, expected in ((7, 5), (8, 20)):
+    assert PhysicsConfig(large_pack_robots=100).iterations_for(50) == 10
+    for n, expected in ((7, 10), (8, 20)):
         with Runner.with_gaits(config, dense_scene(config.robot, gait90, n, seed=1)) as run:
             assert run.physics.client.getPhysicsEngineParameters()['numSolverIterations'] == expected
     with pytest.raises(ConfigError, match='large_pack_iterations'):
@@ -142,3 +142,20 @@ def test_soft_contacts_at_a_coarse_step_warn_with_the_field_named(config: SimCon
         config.with_physics(contact_stiffness=2000.0, time_step=1 / 12000)
     with pytest.raises(ConfigError, match='contact_stiffness'):
         PhysicsConfig(contact_stiffness=0.0)
+
+
+def test_solver_residual_threshold_reaches_bullet(config: SimConfig, gait90: GaitConfig) -> None:
+    """None leaves Bullet's own threshold (1e-7): the same trajectory as setting it; a loose one stops the
+    solver early and moves the robots; a negative or zero one is refused with the field named."""
+    def poses_after(threshold: float | None):
+        with Runner.with_gaits(config.with_physics(solver_residual_threshold=threshold),
+                               dense_scene(config.robot, gait90, 2, seed=1)) as run:
+            run.run(run.ticks_for(0.8))
+            return run.physics.poses()
+
+    unset = poses_after(None)
+    assert (poses_after(BULLET_SOLVER_RESIDUAL_THRESHOLD) == unset).all()
+    assert abs(poses_after(1.0) - unset).max() > 1e-6
+    for bad in (0.0, -1e-5):
+        with pytest.raises(ConfigError, match='solver_residual_threshold'):
+            PhysicsConfig(solver_residual_threshold=bad)
