@@ -76,7 +76,8 @@ MODELS['candidate'] = {**MODELS['authors'], 'servo_bandwidth': 72.0}
 MODELS['flat'] = {**MODELS['candidate'], 'tilt_inertia_scale': 100.0}
 #: The default the study proposed (docs/sim_calibration.md): flat robots, a 0.05 N m servo of bandwidth 200 /s
 #: at 1/480 s, contact ERP 0.6, 10 iterations. ``SimConfig()`` shipped it then and has moved on since (1/960 s,
-#: 5 iterations, ERP 0.1 with restitution 0.80); 'shipped' is whatever ``SimConfig()`` ships now.
+#: 10 iterations, ERP 0.1 with restitution 0.80, the robots' own inertia); 'shipped' is whatever ``SimConfig()``
+#: ships now.
 #: The gait runs at the servo's top speed as the SPEC says (the authors' Chrono speed is dropped).
 MODELS['proposed'] = {**{k: v for k, v in MODELS['flat'].items() if k != 'gait_speed'},
                       'servo_torque': 0.05, 'servo_bandwidth': 200.0, 'time_step': 1.0 / 480}
