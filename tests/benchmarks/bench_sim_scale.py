@@ -14,7 +14,8 @@ machine), and fits cost ~ N^b (least squares on log time-per-step against log N)
 
 Part 2, P1: 7 robots dense (seed 1), 300 periods (``--quick``: 30), batch core with the CLI defaults
 against the raw loop of the same scene in the same run (``--previous``: also both at the previous default,
-1/480 s and 10 solver iterations). Target (issue #11): >= 10x real time on one core at the default step.
+1/960 s with 5 solver iterations and roll / pitch inertia x100). Target (issue #11): >= 10x real time on one
+core at the default step.
 
 Writes ``out/benchmarks/sim_scale.csv``, ``sim_scale_p1.csv`` and ``sim_scale.png``.
 
@@ -112,8 +113,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--skip-p1', action='store_true')
     parser.add_argument('--skip-scale', action='store_true')
     parser.add_argument('--previous', action='store_true',
-                        help='P1 also at the previous default (1/480 s, 10 solver iterations, contact ERP 0.6, '
-                        'restitution 0.85), in the same run')
+                        help='P1 also at the previous default (1/960 s, 5 solver iterations, roll / pitch '
+                        'inertia x100), in the same run')
     parser.add_argument('--iterations', type=solver_setting, nargs='*', default=[],
                         help='P1 also with these solver settings at the default step (batch core), in the same run: '
                              'N (iterations) or N:T (a cap of N iterations with residual threshold T, e.g. 20:1e-5)')
@@ -176,7 +177,7 @@ def main(argv: list[str] | None = None) -> int:
         fns = {'raw PyBullet loop': lambda: bare_loop(config, scene, p1_periods, clock),
                'Runner.run, no recording': lambda: runner_loop(config, scene, p1_periods, clock),
                'batch core, CLI defaults': lambda: batch_loop(config, scene, p1_periods, clock=clock)}
-        previous = config.with_physics(time_step=1.0 / 480.0, solver_iterations=10, contact_erp=0.6, restitution=0.85)
+        previous = config.with_physics(solver_iterations=5, tilt_inertia_scale=100.0)
         if args.previous:
             fns['raw PyBullet loop, previous default'] = lambda: bare_loop(previous, scene, p1_periods, clock)
             fns['batch core, previous default'] = lambda: batch_loop(previous, scene, p1_periods, clock=clock)
