@@ -116,11 +116,17 @@ def test_a_recorded_c2_force_trace_halts_the_hardware_path_at_the_batch_periods(
         t0 = rig.start(1.0)
 
         def play() -> None:
-            for t, volts in trace:       # each tick's sample held for one control tick (the bridge reads at 100 Hz)
+            # each tick's sample held until the next one when contact goes on, else for one control tick plus one
+            # of the bridge's 10 ms reads (so a late read on a loaded machine still sees it); never later than
+            # the next sample, so the trace keeps its own times
+            for i, (t, volts) in enumerate(trace):
                 time.sleep(max(0.0, t0 + t - time.time()))
                 for face, v in zip(FSR_FACES, volts, strict=True):
                     emulator.set_voltage(FSR_CHANNEL[face], v)
-                time.sleep(tick)
+                following = trace[i + 1][0] if i + 1 < len(trace) else math.inf
+                if following - t <= tick * 1.5:
+                    continue
+                time.sleep(max(0.0, t0 + t + tick + 0.010 - time.time()))
                 for face in FSR_FACES:
                     emulator.set_voltage(FSR_CHANNEL[face], 0.0)
 
