@@ -51,10 +51,10 @@ class PhysicsConfig:
     time_step: float = 1.0 / 960.0
     control_tick: float = 1.0 / 60.0            # must be a whole number of time steps
     #: 10 at 1/960 s: the fewest with which every observable is within 10 % of its limit. With 5-8 a bound
-    #: pair glides 19-28 % too fast (10: +5 %, 20: -6 % against 1/3840 s); the drift is 6-8 % off its limit
-    #: at every heading (5: 10 % at 0 deg). It costs a P1 trial 1.2-1.4x the 5 iterations of the previous
+    #: pair glides 19-28 % too fast (10: +5 %, 20: -6 % against 1/3840 s); the drift is 7.7-8.7 % off its
+    #: limit at every heading (5: 11 % at 0 deg). It costs a P1 trial 1.2-1.4x the 5 iterations of the previous
     #: default (docs/sim_calibration.md, Convergence and Speed). Stopping the solver early by its residual
-    #: (``solver_residual_threshold``) was measured and not taken: it leaves the drift 12-13 % off at 0 deg.
+    #: (``solver_residual_threshold``) was measured and not taken: it leaves the drift 13-14 % off at 0 deg.
     solver_iterations: int = 10
     #: Large packs: a scene of more than ``large_pack_robots`` robots is stepped with at least
     #: ``large_pack_iterations`` solver iterations. Bullet's sequential-impulse solver converges more slowly
