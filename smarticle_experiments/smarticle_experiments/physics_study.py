@@ -403,7 +403,7 @@ def drift_run(settings: dict[str, Any], heading_deg: float, periods: int = 20, s
     world = make_world(settings, scene)
     per = world.ticks_for(gait.period)
     world.gaits.start(0.0)  # type: ignore[union-attr]
-    xy = []
+    xy, tilts = [], []
     t0 = time.perf_counter()
     trouble = ''
     try:
@@ -411,17 +411,22 @@ def drift_run(settings: dict[str, Any], heading_deg: float, periods: int = 20, s
             if q >= skip:
                 xy.append(world.physics.poses()[0, :2].copy())
             if q < periods + skip:
-                world.run(per)
+                for _ in range(per):   # tick by tick: the body's tilt at every control tick
+                    world.run(1)
+                    if q >= skip:
+                        tilts.append(float(world.physics.state().tilt[0]))
     except SimTrouble as exc:
         trouble = str(exc)[:80]
     wall = time.perf_counter() - t0
     world.close()
     xy_a = np.array(xy)
     steps = np.linalg.norm(np.diff(xy_a, axis=0), axis=1)
+    tilt_deg = np.degrees(np.array(tilts)) if tilts else np.array([math.nan])
     return {'heading': heading_deg, 'alpha': alpha, 'periods': periods,
             'net_um': float(np.linalg.norm(xy_a[-1] - xy_a[0]) / (len(xy_a) - 1) * 1e6),
             'step_um': float(steps.mean() * 1e6), 'step_se_um': float(steps.std(ddof=1) / math.sqrt(len(steps)) * 1e6),
             'dir_deg': float(math.degrees(math.atan2(*(xy_a[-1] - xy_a[0])[::-1]))),
+            'tilt_max_deg': float(tilt_deg.max()), 'tilt_rms_deg': float(np.sqrt(np.mean(tilt_deg ** 2))),
             'wall_per_sim_s': wall / ((periods + skip) * gait.period), 'trouble': trouble}
 
 
@@ -560,7 +565,7 @@ def exp_drift(args: argparse.Namespace) -> None:
         settings = model_settings(args.model, (args.set or []) + [f'time_step=1/{dtinv}'])
         for h in args.headings:
             row = {'model': args.model, 'set': ';'.join(args.set or []), 'dt_inv': dtinv,
-                   **drift_run(settings, h, args.periods)}
+                   **drift_run(settings, h, args.periods, alpha=args.alpha)}
             append_csv(args.name or 'drift', row)
             print(row, flush=True)
 
@@ -972,6 +977,7 @@ def main() -> None:
         p.add_argument('--periods', type=int, default={'drift': 20, 'pair': 100, 'basin': 75, 'dense': 300}[name])
     sub.choices['drift'].add_argument('--dt', type=int, nargs='*', default=[240])
     sub.choices['drift'].add_argument('--headings', type=float, nargs='*', default=[90.0])
+    sub.choices['drift'].add_argument('--alpha', type=float, default=90.0, help='alpha_max (deg)')
     sub.choices['pair'].add_argument('--dt', type=int, nargs='*', default=[240])
     sub.choices['pair'].add_argument('--starts', type=lambda t: tuple(float(x) for x in t.split(',')), nargs='*',
                                      default=[(330.0, 180.0)])

@@ -76,6 +76,25 @@ def test_trials_in_sim_trouble_are_counted_and_listed_not_used(tmp_path: Path) -
     assert '| 90 | 3 | 74.0 [' in report       # the trouble trial's 9999 is not in the mean
 
 
+def test_drift_is_reported_per_amplitude_and_per_other_grid_setting(tmp_path: Path) -> None:
+    spec = spec_from_mapping({'name': 'amp', 'kind': 'single', 'seeds': 3, 'report': ['drift'],
+                              'grid': {'alpha_max_deg': [10, 90], 'physics.tilt_inertia_scale': [1.0, 100.0]}})
+    trials = spec.trials(CODE)
+    store = ResultStore(tmp_path / 'amp')
+    for t in trials:
+        scale = t.point['physics.tilt_inertia_scale']
+        drift = (115.0 if scale == 1.0 else 18.0) if t.point['alpha_max_deg'] == 10 else 114.0
+        store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': dict(t.point), 'status': 'ok',
+                     'result': {'drift_um_per_cycle': drift + t.seed, 'trouble': ''}})
+    report = write_report(spec, trials, store, CODE).read_text()
+    assert '| physics.tilt_inertia_scale | alpha_max (deg) | robots | drift (um / cycle) [95 %] |' in report
+    assert '| 1.0 | 10 | 3 | 116.0 [' in report and '| 100.0 | 10 | 3 | 19.0 [' in report
+    assert '| 100.0 | 90 | 3 | 115.0 [' in report
+    assert 'P7 drift per cycle at 90 deg (um) (physics.tilt_inertia_scale 1.0)' in report
+    assert 'P7 drift per cycle at 90 deg (um) (physics.tilt_inertia_scale 100.0)' in report
+    assert (store.folder / 'report-amp' / 'drift.png').stat().st_size > 0
+
+
 def test_every_section_a_spec_may_name_is_drawn() -> None:
     from smarticle_experiments.report import SECTIONS
     from smarticle_experiments.spec import REPORT_SECTIONS
