@@ -155,7 +155,45 @@ def section_p1(ctx: Context) -> list[str]:
     return [f'Positive trial: a glider (glider analysis, K = {ctx.spec.base.get("min_periods")} periods, '
             f'bound = r under {ctx.spec.base.get("r_bind_bl")} BL in any frame of a period) bound for >= {limit} '
             f'periods. Isolated: in >= 90 % of its periods no third robot\'s centre within {iso_w:g} W of either '
-            'robot.', '', '![P1](p1_longest.png)']
+            'robot.', '', '![P1](p1_longest.png)', '', *end_groups_table(pairs, iso_w)]
+
+
+def end_groups(xy: np.ndarray, reach: float) -> tuple[int, ...]:
+    """Sizes (largest first) of the groups of robots at positions ``xy`` (N, 2): robots whose centres are
+    closer than ``reach`` are in one group, and so are their neighbours' neighbours (single linkage)."""
+    from scipy.sparse.csgraph import connected_components
+
+    ok = np.isfinite(xy).all(axis=1)
+    pts = xy[ok]
+    close = np.linalg.norm(pts[:, None, :] - pts[None, :, :], axis=2) < reach
+    _, labels = connected_components(close, directed=False)
+    return tuple(sorted(np.bincount(labels).tolist(), reverse=True))
+
+
+def end_groups_table(pairs: Sequence[tuple[Trial, dict[str, Any]]], reach_w: float) -> list[str]:
+    """How the collective ends: the groups of robots within ``reach_w`` W (= BL) of each other in the last
+    recorded frame of every trial that ran to its end, e.g. 6+1 or 4+2+1."""
+    counts: dict[tuple[int, ...], int] = defaultdict(int)
+    largest, whole = [], 0
+    for t, r in pairs:
+        traj = r.get('trajectory_bl')
+        if not traj or float(r.get('periods_run', 0.0)) < float(t.params.get('periods', 0.0)):
+            continue
+        last = np.array([[math.nan if v is None else v for v in p] for p in traj[-1]], dtype=float)
+        sizes = end_groups(last, reach_w)
+        counts[sizes] += 1
+        largest.append(sizes[0])
+        whole += len(sizes) == 1
+    if not counts:
+        return []
+    n = sum(counts.values())
+    lines = [f'Groups at the end of the run (robots closer than {reach_w:g} W, single linkage; {n} trials that ran to '
+             f'the end; largest group: median {np.median(largest):g} robots, all robots in one group in '
+             f'{whole} trials):', '',
+             '| groups | trials | share [95 %] |', '| --- | ---: | --- |']
+    for sizes, k in sorted(counts.items(), key=lambda kv: (-kv[1], kv[0])):
+        lines.append(f'| {"+".join(map(str, sizes))} | {k} | {wilson(k, n).text(".0%")} |')
+    return lines
 
 
 def section_trajectories(ctx: Context) -> list[str]:

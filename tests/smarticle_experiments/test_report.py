@@ -55,6 +55,8 @@ def test_p1_report_puts_the_paper_inside_the_sims_intervals_and_lists_what_it_le
     assert 'Kaplan-Meier' in rows['P3 C2 median lifetime (periods, Kaplan-Meier)']
     assert '151 used, 0 ended in sim trouble, 1 failed, 1 not run yet' in report
     assert 'RuntimeError: boom' in report
+    assert 'Groups at the end of the run (robots closer than 2 W, single linkage; 151 trials' in report
+    assert '| 2 | 151 | 100% [' in report     # the two synthetic robots end 1 W apart: one group of two
     assert ('Trouble margins over 151 trials that ran (at their trouble checks): largest body tilt 2.0 deg '
             '(seed 150; median of the trials\' largest 1.2 deg; the limit is 25 deg), deepest contact overlap '
             '3.50 mm (seed 7; trouble is 4 mm at 3 checks in a row)') in report
@@ -173,3 +175,14 @@ def test_step_convergence_takes_the_strictest_residual_threshold_as_the_referenc
     assert [row.split(' | ')[2] for row in rows] == ['1e-04', '1e-05', '1e-07']
     assert rows[0].endswith('| no |') and '| +33.3% |' in rows[0]
     assert rows[1].endswith('| yes |') and rows[2].endswith('| (reference) |')
+
+
+def test_end_groups_link_robots_through_their_neighbours() -> None:
+    import numpy as np
+
+    from smarticle_experiments.report import end_groups
+
+    # a chain 0-1-2 (each link 1.5 W, the ends 3 W apart), a pair 3-4, a loner 5, a robot off the plate (NaN)
+    xy = np.array([[0.0, 0.0], [1.5, 0.0], [3.0, 0.0], [10.0, 0.0], [10.0, 1.9], [20.0, 20.0], [np.nan, np.nan]])
+    assert end_groups(xy, 2.0) == (3, 2, 1)
+    assert end_groups(xy, 1.0) == (1, 1, 1, 1, 1, 1)
