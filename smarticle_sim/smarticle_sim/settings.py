@@ -41,17 +41,21 @@ class PhysicsConfig:
     The defaults are the converged, stable model of docs/sim_calibration.md: the paper authors' contact
     values (friction 0.3 on every pair, impacts between robots rebounding with 0.85 and none on the plate), a servo
     of fixed bandwidth, the robots' own masses and inertias, at the coarsest step and the fewest solver
-    iterations at which every observable is within 10 % of its limit (1/960 s, 10 iterations). Each value
-    that departs from a measured or published one says why below, with the figure behind it.
+    iterations at which every observable was within 10 % of its limit with x100 roll / pitch inertia
+    (1/960 s, 10 iterations); with the robots' own inertia a bound pair's travel is 10.5 % above its
+    finest-step value (a narrow miss). Each value that departs from a measured or published one says why
+    below, with the figure behind it.
     """
 
     #: 1/960 s: the coarsest step at which the dense statistics converge. The C1 share of P1's gliders is
-    #: 45-49 % at 1/480 s, 24-30 % at 1/960 s and 27-30 % at 1/1920 s on the same seeds; the single-robot
-    #: drift is within 10 % of its limit from 1/480 s on (docs/sim_calibration.md, Convergence).
+    #: 45-49 % at 1/480 s, 24.4-26.5 % at 1/960 s and 27-30 % at 1/1920 s on the same seeds (at contact ERP
+    #: 0.6, x100 inertia); the single-robot drift is within 10 % of its limit from 1/480 s on
+    #: (docs/sim_calibration.md, Convergence).
     time_step: float = 1.0 / 960.0
     control_tick: float = 1.0 / 60.0            # must be a whole number of time steps
-    #: 10 at 1/960 s: the fewest with which every observable is within 10 % of its limit. With 5-8 a bound
-    #: pair glides 19-28 % too fast (10: +5 %, 20: -6 % against 1/3840 s); the drift is 7.7-8.7 % off its
+    #: 10 at 1/960 s: the fewest with which every observable was within 10 % of its limit at x100 roll /
+    #: pitch inertia. With 5-8 a bound pair glides 19-28 % too fast (10: +5 %, 20: -6 % against 1/3840 s,
+    #: at x100; with the robots' own inertia 10 give +10.5 %: a narrow miss); the drift is 7.7-8.7 % off its
     #: limit at every heading (5: 11 % at 0 deg). It costs a P1 trial 1.2-1.4x the 5 iterations of the previous
     #: default (docs/sim_calibration.md, Convergence and Speed). Stopping the solver early by its residual
     #: (``solver_residual_threshold``) was measured and not taken: it leaves the drift 13-14 % off at 0 deg.
@@ -91,7 +95,7 @@ class PhysicsConfig:
     max_tilt: float = math.radians(25.0)        # trouble: body z axis tilted beyond this
     max_speed: float = 2.0                      # trouble: body speed (m/s)
     #: Bullet's contact error reduction: the fraction of an overlap pushed out per step. 0.1: the push-out
-    #: of the overlap found at an impact adds to the bounce, so at 0.6 (the previous default) an impact
+    #: of the overlap found at an impact adds to the bounce, so at 0.6 (an earlier default) an impact
     #: rebounded with 0.84-1.41 of the approach speed at restitution 0.85 (1.13 on average: super-elastic);
     #: at 0.1 with restitution 0.80 with 0.79-0.89 (docs/sim_calibration.md, "What restitution Bullet gives";
     #: P1, stability and speed unchanged on the same seeds, "p1_impact").
@@ -117,8 +121,9 @@ class PhysicsConfig:
     #: Factor on the body's roll and pitch inertia (mass, yaw inertia and contacts unchanged). 1: the body's
     #: own. x100 kept robots flat while impacts were super-elastic (contact ERP 0.6: jammed robots bounced
     #: between two contacts and rolled over; study, C); at the default contact the robots' own inertia runs
-    #: clean (0 numerical stops in 130 dense trials and 4 of 4 50-robot runs; docs/sim_calibration.md, "The
-    #: robots' own roll and pitch inertia"), so nothing departs from the robot here any more.
+    #: clean (0 numerical stops in 130 dense trials at 5 solver iterations and 4 of 4 50-robot runs at 20;
+    #: docs/sim_calibration.md, "The robots' own roll and pitch inertia"), so nothing departs from the robot
+    #: here any more.
     tilt_inertia_scale: float = 1.0
     #: The arms' ends in plan view. 'square': the authors' box arms (5.0 x 0.3 x 2.3 cm). 'round': the same
     #: box with both vertical end edges rounded to the arm's half thickness (a stadium in plan view: a box
