@@ -24,7 +24,7 @@ import yaml
 from smarticle_sim.settings import NotConvergedWarning
 
 from .errors import ExperimentError, SchedulerError, SpecError
-from .spec import ExperimentSpec, builtin_names, load_spec
+from .spec import ExperimentSpec, builtin_names, load_spec, parse_seed_ranges
 from .store import DEFAULT_ROOT, ResultStore, code_version
 from .trials import KINDS
 
@@ -62,6 +62,14 @@ def _positive_float(text: str) -> float:
     return value
 
 
+def _seed_ranges(text: str) -> tuple[int, ...]:
+    """argparse type: ``1000-1029`` or ``1,5,10-12``."""
+    try:
+        return parse_seed_ranges(text)
+    except SpecError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser."""
     parser = _Parser(prog=PROG, description=(__doc__ or '').split('\n')[0])
@@ -75,6 +83,9 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument('spec', help='a shipped spec name (see list) or a YAML file')
         p.add_argument('--trials', type=_positive_int, default=None,
                        help='seeds 0..N-1 per grid point instead of the spec\'s seeds')
+        p.add_argument('--seeds', type=_seed_ranges, default=None, metavar='A-B[,C,...]',
+                       help='only these seeds (e.g. 1000-1029), in the same store; the report is '
+                            'report-<name>-seeds-<ranges>')
         p.add_argument('--periods', type=_positive_float, default=None, help='gait periods per trial')
         p.add_argument('--out', type=Path, default=DEFAULT_ROOT, help=f'store root (default {DEFAULT_ROOT})')
     run = sub.choices['run']
@@ -91,8 +102,12 @@ def build_parser() -> argparse.ArgumentParser:
 def resolve(args: argparse.Namespace) -> ExperimentSpec:
     """The spec named on the command line with --trials / --periods applied."""
     spec = load_spec(args.spec)
+    if args.trials is not None and args.seeds is not None:
+        raise SpecError('--trials and --seeds both choose the seeds: give one')
     if args.trials is not None:
         spec = spec.with_seed_count(args.trials)
+    if args.seeds is not None:
+        spec = spec.with_seeds(args.seeds)
     if args.periods is not None:
         spec = spec.with_periods(args.periods)
     return spec

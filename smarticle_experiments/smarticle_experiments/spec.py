@@ -81,6 +81,19 @@ class ExperimentSpec:
             raise SpecError(f'{self.name}: --trials must be a whole number >= 1, got {count!r}')
         return _replace(self, seeds=tuple(range(count)))
 
+    def with_seeds(self, seeds: Sequence[int]) -> ExperimentSpec:
+        """The same spec over ``seeds`` only (``--seeds``), in the same store, under the name
+        ``<name>-seeds-<ranges>`` so that its report sits beside the whole spec's; SpecError unless the seeds are
+        whole numbers >= 0, at least one, none twice."""
+        if not seeds:
+            raise SpecError(f'{self.name}: --seeds names no seed')
+        if any(isinstance(s, bool) or not isinstance(s, int) or s < 0 for s in seeds):
+            raise SpecError(f'{self.name}: --seeds must be whole numbers >= 0, got {list(seeds)!r}')
+        if len(set(seeds)) != len(seeds):
+            raise SpecError(f'{self.name}: --seeds lists a seed twice')
+        label = ','.join(f'{a}-{b}' if b > a else f'{a}' for a, b in seed_runs(sorted(seeds)))
+        return _replace(self, seeds=tuple(seeds), name=f'{self.name}-seeds-{label}', store=self.store or self.name)
+
     def with_periods(self, periods: float) -> ExperimentSpec:
         """The same spec with ``periods`` gait periods per trial; SpecError unless > 0."""
         _check_positive(self.name, 'periods', periods)
@@ -102,6 +115,34 @@ class ExperimentSpec:
             for seed in self.seeds:
                 out.append(Trial(self.kind, params, seed, trial_key(self.kind, params, seed, code), point))
         return out
+
+
+def seed_runs(seeds: Sequence[int]) -> list[tuple[int, int]]:
+    """Sorted seeds as runs of consecutive ones: [0, 1, 2, 5] -> [(0, 2), (5, 5)]."""
+    runs: list[list[int]] = []
+    for seed in seeds:
+        if runs and seed == runs[-1][1] + 1:
+            runs[-1][1] = seed
+        else:
+            runs.append([seed, seed])
+    return [(a, b) for a, b in runs]
+
+
+def parse_seed_ranges(text: str) -> tuple[int, ...]:
+    """``1000-1029`` or ``1,5,10-12`` as seeds; SpecError naming the part that is not a seed or a range."""
+    seeds: list[int] = []
+    for part in text.split(','):
+        part = part.strip()
+        low, sep, high = part.partition('-')
+        try:
+            a = int(low)
+            b = int(high) if sep else a
+        except ValueError:
+            raise SpecError(f'--seeds: {part!r} is not a seed or a range A-B of seeds') from None
+        if a < 0 or b < a:
+            raise SpecError(f'--seeds: {part!r} is not a range of seeds >= 0 (A-B with A <= B)')
+        seeds += range(a, b + 1)
+    return tuple(seeds)
 
 
 def _replace(spec: ExperimentSpec, **changes: Any) -> ExperimentSpec:

@@ -28,7 +28,7 @@ def free_port() -> int:
 
 
 @pytest.mark.parametrize('case', ['unknown key', 'zero trials', 'negative periods', 'empty grid', 'zero seeds',
-                                  'no such spec', 'dead scheduler'])
+                                  'no such spec', 'dead scheduler', 'bad seeds', 'seeds and trials'])
 def test_bad_input_is_one_line_exit_2_and_writes_nothing(case: str, tmp_path: Path,
                                                          capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / 'out'
@@ -40,6 +40,8 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(case: str, tmp_path: Pa
         'zero seeds': ['run', spec_file(tmp_path, seeds=0)],
         'no such spec': ['run', 'p99'],
         'dead scheduler': ['run', spec_file(tmp_path), '--scheduler', f'tcp://127.0.0.1:{free_port()}'],
+        'bad seeds': ['run', spec_file(tmp_path), '--seeds', '5-2'],
+        'seeds and trials': ['run', spec_file(tmp_path), '--seeds', '0-1', '--trials', '2'],
     }[case]
     try:
         code = main([*argv, '--out', str(out), '--no-progress'])
@@ -50,7 +52,8 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(case: str, tmp_path: Pa
     assert len(err.splitlines()) == 1 and err.startswith('smarticle-experiments: error:')
     cause = {'unknown key': 'colour', 'zero trials': '--trials', 'negative periods': '--periods',
              'empty grid': 'grid.alpha_max_deg', 'zero seeds': 'seeds', 'no such spec': 'p99',
-             'dead scheduler': 'does not answer'}[case]
+             'dead scheduler': 'does not answer', 'bad seeds': '--seeds',
+             'seeds and trials': '--trials and --seeds'}[case]
     assert cause in err
     assert not out.exists()
 
@@ -68,3 +71,22 @@ def test_list_names_the_shipped_experiments(capsys: pytest.CaptureFixture[str]) 
 def test_report_of_a_spec_never_run_says_so(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(['report', spec_file(tmp_path), '--out', str(tmp_path / 'out')]) == 2
     assert 'run it first' in capsys.readouterr().err
+
+
+def test_a_report_over_some_of_the_seeds_sits_beside_the_whole_ones(tmp_path: Path,
+                                                                   capsys: pytest.CaptureFixture[str]) -> None:
+    from smarticle_experiments.spec import load_spec
+    from smarticle_experiments.store import ResultStore, code_version
+
+    path = spec_file(tmp_path, name='lone', kind='single', params={}, seeds={'start': 10, 'count': 4},
+                     report=['drift'])
+    spec = load_spec(path)
+    store = ResultStore(tmp_path / 'out' / spec.store)
+    for t in spec.trials(code_version()):
+        store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': {}, 'status': 'ok',
+                     'result': {'drift_um_per_cycle': float(t.seed), 'trouble': ''}})
+    assert main(['report', path, '--seeds', '11-12', '--out', str(tmp_path / 'out')]) == 0
+    part = (store.folder / 'report-lone-seeds-11-12' / 'report.md').read_text()
+    assert '| 90 | 2 | 11.5 [' in part and '11, 12' in part
+    assert main(['report', path, '--out', str(tmp_path / 'out')]) == 0
+    assert '| 90 | 4 | 11.5 [' in (store.folder / 'report-lone' / 'report.md').read_text()
