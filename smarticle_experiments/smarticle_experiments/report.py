@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 from smarticle_sim.settings import BULLET_SOLVER_RESIDUAL_THRESHOLD
 
-from .spec import ExperimentSpec, Trial
+from .spec import ExperimentSpec, Trial, seed_runs
 from .stats import Estimate, bootstrap_mean, kaplan_meier, wilson
 from .store import ResultStore, write_atomic
 from .trials import config_of, ensemble_msd, msd_beta
@@ -51,13 +51,8 @@ def seed_ranges(seeds: Sequence[int]) -> str:
     """Sorted seeds compactly: ``1000, 1001, 1003..1021, 1023`` (a run of three or more as ``a..b``; '-' if none)."""
     if not seeds:
         return '-'
-    runs: list[list[int]] = [[seeds[0], seeds[0]]]
-    for seed in seeds[1:]:
-        if seed == runs[-1][1] + 1:
-            runs[-1][1] = seed
-        else:
-            runs.append([seed, seed])
-    return ', '.join(f'{a}..{b}' if b - a >= 2 else ', '.join(map(str, range(a, b + 1))) for a, b in runs)
+    return ', '.join(f'{a}..{b}' if b - a >= 2 else ', '.join(map(str, range(a, b + 1)))
+                     for a, b in seed_runs(seeds))
 
 
 @dataclass
