@@ -294,34 +294,73 @@ def section_lifetimes(ctx: Context) -> list[str]:
             *lines, '', '![lifetimes](lifetimes.png)']
 
 
+#: Outcome of a P4 start -> its colour in the basin maps (pink bound, blue repelled, as in the paper's Fig. 4a).
+BASIN_COLOURS = {'bound': 'tab:pink', 'repelled': 'tab:blue', 'neither': 'lightgrey', 'inadmissible': 'k'}
+
+#: The classes of P4 starts the basin table counts (theta on a quadrant boundary counts in neither quadrant pair;
+#: "antiparallel" / "parallel" exactly phi = 180 / 0, the bands 90 <= phi <= 270 against the rest).
+BASIN_CLASSES: tuple[tuple[str, Callable[[float, float], bool]], ...] = (
+    ('all admissible', lambda theta, phi: True),
+    ('theta in quadrants 1, 4', lambda theta, phi: 0.0 < theta < 90.0 or 270.0 < theta < 360.0),
+    ('theta in quadrants 2, 3', lambda theta, phi: 90.0 < theta < 180.0 or 180.0 < theta < 270.0),
+    ('antiparallel normals (phi 180)', lambda theta, phi: phi == 180.0),
+    ('parallel normals (phi 0)', lambda theta, phi: phi == 0.0),
+    ('antiparallel band (90 <= phi <= 270)', lambda theta, phi: 90.0 <= phi <= 270.0),
+    ('parallel band (phi < 90 or > 270)', lambda theta, phi: phi < 90.0 or phi > 270.0),
+)
+
+
+def basin_outcome(r: Mapping[str, Any]) -> str:
+    """A P4 start's outcome by the issue's rule: 'bound' if the pair is in contact in each of the last
+    ``bound_tail`` periods (it keeps colliding to the end), 'repelled' if its centres end farther apart than
+    twice the robot's reach (no shape can touch), 'neither' otherwise, or 'inadmissible'. A record from before
+    the contact rule (no ``colliding_at_end``) falls back to the earlier rule: bound = r < r_bind or contact in
+    each of the last periods, every other start 'repelled'."""
+    if not r.get('admissible'):
+        return 'inadmissible'
+    if r.get('colliding_at_end') is None:
+        return 'bound' if r.get('bound_at_end') else 'repelled'
+    if r.get('colliding_at_end'):
+        return 'bound'
+    return 'repelled' if r.get('out_of_reach_at_end') else 'neither'
+
+
 def section_basin(ctx: Context) -> list[str]:
-    """Fig. 4a / P4: bound-at-end over the (theta, phi) grid for each phase of robot 2."""
+    """Fig. 4a / P4: each start's outcome (bound, repelled, neither) over the (theta, phi) grid per phase of
+    robot 2, and the bound share of each class of starts."""
     rows = [(t, r) for t, r in ctx.ok()]
     adm = [(t, r) for t, r in rows if r.get('admissible')]
     phases = sorted({float(t.params['phase2']) for t, _ in rows})
+    tail = ctx.spec.base.get('bound_tail')
+    legend_text = 'pink bound, blue repelled, grey neither, black inadmissible'
     fig = figure(5.5 * max(1, len(phases)), 5)
     for k, phase in enumerate(phases):
         ax = fig.add_subplot(1, max(1, len(phases)), k + 1)
         for t, r in (x for x in rows if float(x[0].params['phase2']) == phase):
-            colour = 'k' if not r.get('admissible') else ('tab:pink' if r.get('bound_at_end') else 'tab:blue')
-            ax.scatter(float(t.params['theta_deg']), float(t.params['phi_deg']), c=colour, s=30, marker='s')
+            ax.scatter(float(t.params['theta_deg']), float(t.params['phi_deg']), c=BASIN_COLOURS[basin_outcome(r)],
+                       s=30, marker='s')
         ax.set_xlabel('theta (deg)')
         ax.set_ylabel('phi (deg)')
-        ax.set_title(f'phase {phase:g}: pink bound at end, blue apart, black inadmissible', fontsize=8)
+        ax.set_title(f'phase {phase:g}: {legend_text}', fontsize=8)
     ctx.save(fig, 'basin')
     polar = figure(5.5 * max(1, len(phases)), 5.5)
     for k, phase in enumerate(phases):   # Fig. 4a: robot 2 around robot 1 at angle theta, rings = phi
         ax = polar.add_subplot(1, max(1, len(phases)), k + 1, projection='polar')
         sel = [x for x in rows if float(x[0].params['phase2']) == phase]
-        colours = ['k' if not r.get('admissible') else ('tab:pink' if r.get('bound_at_end') else 'tab:blue')
-                   for _, r in sel]
         ax.scatter([math.radians(float(t.params['theta_deg'])) for t, _ in sel],
-                   [float(t.params['phi_deg']) % 360.0 + 30.0 for t, _ in sel], c=colours, s=40, marker='s')
+                   [float(t.params['phi_deg']) % 360.0 + 30.0 for t, _ in sel],
+                   c=[BASIN_COLOURS[basin_outcome(r)] for _, r in sel], s=40, marker='s')
         ax.set_rlim(0.0, 400.0)
         ax.set_rticks([30.0, 120.0, 210.0, 300.0], labels=['phi 0', '90', '180', '270'], fontsize=6)
         ax.set_title(f'phase {phase:g}: angle = theta, ring = phi', fontsize=8)
     ctx.save(polar, 'basin_polar')
-    bound = [(t, r) for t, r in adm if r.get('bound_at_end')]
+    outcome = {id(r): basin_outcome(r) for _, r in adm}
+    bound = [(t, r) for t, r in adm if outcome[id(r)] == 'bound']
+    counts = {name: sum(outcome[id(r)] == name for _, r in adm) for name in ('bound', 'repelled', 'neither')}
+    earlier = sum(bool(r.get('bound_at_end')) for _, r in adm)
+
+    def angles(t: Trial) -> tuple[float, float]:
+        return float(t.params['theta_deg']) % 360.0, float(t.params['phi_deg']) % 360.0
 
     def q14(t: Trial) -> bool:
         theta = float(t.params['theta_deg']) % 360.0
@@ -336,8 +375,29 @@ def section_basin(ctx: Context) -> list[str]:
         Comparison('P4 bound starts with antiparallel normals (90 <= phi <= 270 deg)', 'mostly (> 50 %)', anti,
                    f'{anti.text(".0%", 1)}', bool(anti.n and anti.low > 0.5), 'inside = Wilson lower bound > 50 %'),
     ]
-    return [f'{len(rows)} starts, {len(adm)} admissible, {len(bound)} bound at the end '
-            f'(bound in each of the last {ctx.spec.base.get("bound_tail")} periods).', '', '![basin](basin.png)', '',
+    columns = [*(f'phase {p:g}' for p in phases), 'all phases']
+    table = ['| starts | ' + ' | '.join(f'{c}: bound' for c in columns) + ' | all phases: repelled | all phases: '
+             'neither |', '| --- |' + ' --- |' * (len(columns) + 2)]
+    for name, member in BASIN_CLASSES:
+        cells = []
+        for of_phase in [*phases, None]:
+            starts = [r for t, r in adm
+                      if member(*angles(t)) and (of_phase is None or float(t.params['phase2']) == of_phase)]
+            k = sum(outcome[id(r)] == 'bound' for r in starts)
+            est = wilson(k, len(starts))
+            cells.append(f'{k}/{len(starts)} ({est.low:.2f}-{est.high:.2f})' if est.n else '-')
+        starts = [r for t, r in adm if member(*angles(t))]
+        for kind in ('repelled', 'neither'):
+            k = sum(outcome[id(r)] == kind for r in starts)
+            cells.append(f'{k}/{len(starts)}')
+        table.append(f'| {name} | ' + ' | '.join(cells) + ' |')
+    return [f'{len(rows)} starts, {len(adm)} admissible: {counts["bound"]} bound (in contact in each of the last '
+            f'{tail} periods: the pair keeps colliding to the end), {counts["repelled"]} repelled (centres farther '
+            f'apart at the end than twice the robot\'s reach: no shape can touch), {counts["neither"]} neither '
+            f'(within reach, not colliding every period). By the earlier rule (r < r_bind or contact in each of '
+            f'the last {tail} periods) {earlier} were bound.', '',
+            'Bound starts of each class out of its admissible ones (95 % Wilson interval); theta on a quadrant '
+            'boundary counts in neither quadrant pair:', '', *table, '', '![basin](basin.png)', '',
             '![basin, polar](basin_polar.png)']
 
 

@@ -179,6 +179,16 @@ def pair_start(p: Mapping[str, Any], seed: int) -> tuple[float, float, float]:
             float(p['phi_deg'] + jitter[2] * u[2]))
 
 
+def _tail(flags: Sequence[bool]) -> int:
+    """How many of the last entries of ``flags`` are true in a row."""
+    tail = 0
+    for flag in reversed(flags):
+        if not flag:
+            break
+        tail += 1
+    return tail
+
+
 def pair_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
     """P4/P5: two robots from pair coordinates; binding at the end, travel, and the pair's gliders."""
     config = config_of(p)
@@ -198,15 +208,15 @@ def pair_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
     r_all = np.hypot(*(rec.poses[:, 1, :2] - rec.poses[:, 0, :2]).T) / bl
     bound = [bool(touching[q * per:(q + 1) * per].any() or (r_all[q * per:(q + 1) * per] < p['r_bind_bl']).any())
              for q in range(len(touching) // per)]
-    tail = 0
-    for b in reversed(bound):
-        if not b:
-            break
-        tail += 1
+    colliding = [bool(touching[q * per:(q + 1) * per].any()) for q in range(len(touching) // per)]
+    tail, colliding_tail = _tail(bound), _tail(colliding)
     com = rec.poses[::per, :, :2].mean(axis=1) / bl
     phi_end = (rec.poses[-1, 1, 2] - rec.poses[-1, 0, 2]) % (2.0 * math.pi)
     out.update(start, admissible=True, bound_tail_periods=tail,
                bound_at_end=tail >= int(p['bound_tail']),
+               colliding_tail_periods=colliding_tail,
+               colliding_at_end=colliding_tail >= int(p['bound_tail']),
+               out_of_reach_at_end=bool(r_all[-1] * bl > 2.0 * config.robot.reach),
                late_w=float(np.linalg.norm(com[-1] - com[len(com) // 2])) if len(com) else 0.0,
                r_end_bl=float(r_all[-1]), phi_end_deg=math.degrees(phi_end))
     return out

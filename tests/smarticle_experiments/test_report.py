@@ -186,3 +186,35 @@ def test_end_groups_link_robots_through_their_neighbours() -> None:
     xy = np.array([[0.0, 0.0], [1.5, 0.0], [3.0, 0.0], [10.0, 0.0], [10.0, 1.9], [20.0, 20.0], [np.nan, np.nan]])
     assert end_groups(xy, 2.0) == (3, 2, 1)
     assert end_groups(xy, 1.0) == (1, 1, 1, 1, 1, 1)
+
+
+def test_the_basin_counts_a_start_bound_only_if_it_keeps_colliding_and_repelled_only_out_of_reach(
+        tmp_path: Path) -> None:
+    """P4's rule (issue #11): bound = in contact in each of the last periods; repelled = out of reach at the
+    end; a pair within reach that does not collide every period (e.g. two in-phase robots drifting side by
+    side) is neither, though the earlier rule (r < r_bind or contact) counted it bound."""
+    from smarticle_experiments.report import basin_outcome
+
+    spec = spec_from_mapping({'name': 'p4', 'kind': 'pair', 'seeds': [0], 'report': ['basin'],
+                              'analysis': {'bound_tail': 5},
+                              'grid': {'phase2': [0.0], 'theta_deg': [30, 150], 'phi_deg': [0, 180]}})
+    trials = spec.trials(CODE)
+    outcomes = {(30, 180): dict(colliding_at_end=True, out_of_reach_at_end=False, bound_at_end=True),
+                (30, 0): dict(colliding_at_end=False, out_of_reach_at_end=False, bound_at_end=True),
+                (150, 180): dict(colliding_at_end=False, out_of_reach_at_end=True, bound_at_end=False),
+                (150, 0): None}
+    store = ResultStore(tmp_path / 'p4')
+    for t in trials:
+        fields = outcomes[(int(t.params['theta_deg']), int(t.params['phi_deg']))]
+        result = {'admissible': False, 'why': 'overlap', 'trouble': ''} if fields is None else \
+            {'admissible': True, 'trouble': '', 'r_end_bl': 1.4, 'gliders': [], **fields}
+        store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': dict(t.point), 'status': 'ok',
+                     'result': result})
+    report = write_report(spec, trials, store, CODE).read_text()
+    assert ('4 starts, 3 admissible: 1 bound (in contact in each of the last 5 periods: the pair keeps colliding '
+            'to the end), 1 repelled') in report and '1 neither' in report
+    assert 'By the earlier rule (r < r_bind or contact in each of the last 5 periods) 2 were bound.' in report
+    assert '| theta in quadrants 1, 4 | 1/2 (' in report and '| theta in quadrants 2, 3 | 0/1 (' in report
+    assert '| parallel normals (phi 0) | 0/1 (' in report
+    assert basin_outcome({'admissible': True, 'bound_at_end': True}) == 'bound'   # a record from before the rule
+    assert basin_outcome({'admissible': True, 'bound_at_end': False}) == 'repelled'
