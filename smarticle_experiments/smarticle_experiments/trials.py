@@ -200,7 +200,9 @@ def pair_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
                            (0.0, float(p['phase2'])), seed=seed)
     except SceneError as exc:
         return {**start, 'admissible': False, 'why': str(exc), 'trouble': '', 'gliders': []}
-    rec = run_trial(config, scene, float(p['periods']), sample_every=int(p['sample_every']), record_contacts=True)
+    watch = ContactPeriods(gait.period)   # contact at every physics step: a kick lasts one to a few steps
+    rec = run_trial(config, scene, float(p['periods']), sample_every=int(p['sample_every']), record_contacts=True,
+                    controllers=lambda physics, gaits: [watch])
     out = analyse_recording(config, rec, gait.period, p)
     bl = config.robot.body_length
     per = max(1, round(gait.period / (config.physics.control_tick * int(p['sample_every']))))
@@ -208,7 +210,8 @@ def pair_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
     r_all = np.hypot(*(rec.poses[:, 1, :2] - rec.poses[:, 0, :2]).T) / bl
     bound = [bool(touching[q * per:(q + 1) * per].any() or (r_all[q * per:(q + 1) * per] < p['r_bind_bl']).any())
              for q in range(len(touching) // per)]
-    colliding = [bool(touching[q * per:(q + 1) * per].any()) for q in range(len(touching) // per)]
+    touched = watch.periods.get((0, 1), set())
+    colliding = [q in touched for q in range(len(bound))]
     tail, colliding_tail = _tail(bound), _tail(colliding)
     com = rec.poses[::per, :, :2].mean(axis=1) / bl
     phi_end = (rec.poses[-1, 1, 2] - rec.poses[-1, 0, 2]) % (2.0 * math.pi)
