@@ -45,6 +45,7 @@ class C2Sample:
     r_bl: float
     theta_deg: float
     phi_deg: float
+    touched: bool = False   # the two robots touched at some physics step of the period that starts here
 
 
 def harvest_trial(seed: int, periods: float = 150.0, preset: str = 'feedback', alpha_max_deg: float = 90.0,
@@ -53,6 +54,7 @@ def harvest_trial(seed: int, periods: float = 150.0, preset: str = 'feedback', a
     """The C2 samples of one dense open-loop trial (seeded scene, in phase)."""
     from smarticle_common.gait import GaitConfig
     from smarticle_sim.batch import run_trial
+    from smarticle_sim.runner import ContactPeriods
     from smarticle_sim.scenes import dense_scene
     from smarticle_sim.settings import SimConfig
     from smarticle_tracking.gliders import GliderClass, GliderConfig, analyse_gliders
@@ -61,7 +63,9 @@ def harvest_trial(seed: int, periods: float = 150.0, preset: str = 'feedback', a
     bl = config.robot.body_length
     gait = GaitConfig.from_degrees(alpha_max_deg, servo_speed=config.robot.servo_speed)
     scene = dense_scene(config.robot, gait, n=robots, seed=seed)
-    rec = run_trial(config, scene, periods, sample_every=sample_every, record_contacts=False)
+    watch = ContactPeriods(gait.period)   # contacts at every physics step (a kick lasts one to a few steps)
+    rec = run_trial(config, scene, periods, sample_every=sample_every, record_contacts=False,
+                    controllers=lambda physics, gaits: [watch])
     cfg = GliderConfig(period=gait.period, r_bind=R_BIND_BL * bl, min_periods=min_periods, body_length=bl, width=bl)
     analysis = analyse_gliders(rec.time, rec.poses, cfg, t0=0.0)
     samples: list[C2Sample] = []
@@ -73,7 +77,8 @@ def harvest_trial(seed: int, periods: float = 150.0, preset: str = 'feedback', a
             if abs(rec.time[idx] - k * gait.period) > 1e-6:
                 continue
             a, b, (r, theta, phi) = front_order(g.i, g.j, rec.poses[idx])
-            samples.append(C2Sample(seed, a, b, k, r / bl, theta, phi))
+            touched = k in watch.periods.get((min(g.i, g.j), max(g.i, g.j)), set())
+            samples.append(C2Sample(seed, a, b, k, r / bl, theta, phi, touched))
     return samples
 
 
@@ -129,13 +134,24 @@ def summary(samples: Sequence[C2Sample]) -> dict[str, float]:
     return out
 
 
-def format_summary(s: dict[str, float]) -> str:
-    """Markdown table of the harvest's medians and quartiles."""
-    rows = ['| coordinate | median | quartiles |', '| --- | ---: | --- |']
+def format_summary(s: dict[str, float], touching: dict[str, float] | None = None) -> str:
+    """Markdown table of the harvest's medians and quartiles; with ``touching`` (the summary of the samples
+    whose period had a contact) a second column pair for those."""
+    head = '| coordinate | median | quartiles |'
+    rows = [head + (' median, periods with contact | quartiles |' if touching else ''),
+            '| --- | ---: | --- |' + (' ---: | --- |' if touching else '')]
     for name, label in (('r_bl', 'r (BL)'), ('theta_deg', 'theta (deg)'), ('phi_deg', 'phi (deg)')):
-        rows.append(f'| {label} | {s[f"{name}_median"]:.3f} | {s[f"{name}_q1"]:.3f} - {s[f"{name}_q3"]:.3f} |')
+        row = f'| {label} | {s[f"{name}_median"]:.3f} | {s[f"{name}_q1"]:.3f} - {s[f"{name}_q3"]:.3f} |'
+        if touching:
+            row += (f' {touching[f"{name}_median"]:.3f} | {touching[f"{name}_q1"]:.3f} - '
+                    f'{touching[f"{name}_q3"]:.3f} |')
+        rows.append(row)
     rows.append(f'\n{int(s["samples"])} period samples of {int(s["gliders"])} C2 gliders in {int(s["seeds"])} '
                 f'trials (the first {SETTLE_PERIODS} periods of each glider skipped).')
+    if touching:
+        rows.append(f'In {int(touching["samples"])} of them ({touching["samples"] / s["samples"]:.0%}) the pair '
+                    f'touched during the period ({int(touching["gliders"])} gliders, {int(touching["seeds"])} '
+                    f'trials).')
     return '\n'.join(rows)
 
 
@@ -144,9 +160,10 @@ def write_csv(samples: Sequence[C2Sample], path: Path) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     with path.open('w', newline='') as fh:
         writer = csv.writer(fh)
-        writer.writerow(['seed', 'i', 'j', 'period', 'r_bl', 'theta_deg', 'phi_deg'])
+        writer.writerow(['seed', 'i', 'j', 'period', 'r_bl', 'theta_deg', 'phi_deg', 'touched'])
         for s in samples:
-            writer.writerow([s.seed, s.i, s.j, s.period, f'{s.r_bl:.5f}', f'{s.theta_deg:.3f}', f'{s.phi_deg:.3f}'])
+            writer.writerow([s.seed, s.i, s.j, s.period, f'{s.r_bl:.5f}', f'{s.theta_deg:.3f}', f'{s.phi_deg:.3f}',
+                             int(s.touched)])
     return path
 
 
@@ -206,7 +223,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ValueError as exc:
         sys.stderr.write(f'smarticle-c2-harvest: {exc}\n')
         return 1
-    print(format_summary(s))
+    touched = [x for x in samples if x.touched]
+    print(format_summary(s, summary(touched) if touched else None))
     out = Path(args.out)
     print(f'wrote {write_csv(samples, out / "c2_samples.csv")} and {plot(samples, out / "c2_harvest.png")}')
     return 0

@@ -49,3 +49,13 @@ def test_a_short_harvest_samples_only_c2_period_boundaries() -> None:
         assert min(abs(s.phi_deg), abs(360.0 - s.phi_deg)) < 90.0      # C2: parallel normals
     # one sample per period of each glider (a trial can hold two C2 gliders at once)
     assert len({(frozenset((s.i, s.j)), s.period) for s in samples}) == len(samples)
+
+
+def test_the_summary_says_how_many_samples_had_contact_and_where_those_pairs_sit() -> None:
+    from smarticle_experiments.c2_harvest import format_summary
+
+    samples = [C2Sample(1, 0, 1, k, 1.2 + 0.1 * k, 90.0, 0.0, touched=k < 2) for k in range(4)]
+    text = format_summary(summary(samples), summary([s for s in samples if s.touched]))
+    assert '| r (BL) | 1.350 | 1.275 - 1.425 | 1.250 | 1.225 - 1.275 |' in text
+    assert 'In 2 of them (50%) the pair touched during the period (1 gliders, 1 trials).' in text
+    assert 'periods with contact' not in format_summary(summary(samples))
