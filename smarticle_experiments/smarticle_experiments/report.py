@@ -354,9 +354,9 @@ def section_basin(ctx: Context) -> list[str]:
         ax.set_rticks([30.0, 120.0, 210.0, 300.0], labels=['phi 0', '90', '180', '270'], fontsize=6)
         ax.set_title(f'phase {phase:g}: angle = theta, ring = phi', fontsize=8)
     ctx.save(polar, 'basin_polar')
-    outcome = {id(r): basin_outcome(r) for _, r in adm}
-    bound = [(t, r) for t, r in adm if outcome[id(r)] == 'bound']
-    counts = {name: sum(outcome[id(r)] == name for _, r in adm) for name in ('bound', 'repelled', 'neither')}
+    judged = [(t, basin_outcome(r)) for t, r in adm]
+    bound = [(t, r) for (t, r), (_, outcome) in zip(adm, judged, strict=True) if outcome == 'bound']
+    counts = {name: sum(outcome == name for _, outcome in judged) for name in ('bound', 'repelled', 'neither')}
     earlier = sum(bool(r.get('bound_at_end')) for _, r in adm)
 
     def angles(t: Trial) -> tuple[float, float]:
@@ -381,15 +381,13 @@ def section_basin(ctx: Context) -> list[str]:
     for name, member in BASIN_CLASSES:
         cells = []
         for of_phase in [*phases, None]:
-            starts = [r for t, r in adm
+            starts = [outcome for t, outcome in judged
                       if member(*angles(t)) and (of_phase is None or float(t.params['phase2']) == of_phase)]
-            k = sum(outcome[id(r)] == 'bound' for r in starts)
+            k = starts.count('bound')
             est = wilson(k, len(starts))
             cells.append(f'{k}/{len(starts)} ({est.low:.2f}-{est.high:.2f})' if est.n else '-')
-        starts = [r for t, r in adm if member(*angles(t))]
-        for kind in ('repelled', 'neither'):
-            k = sum(outcome[id(r)] == kind for r in starts)
-            cells.append(f'{k}/{len(starts)}')
+        starts = [outcome for t, outcome in judged if member(*angles(t))]
+        cells += [f'{starts.count(kind)}/{len(starts)}' for kind in ('repelled', 'neither')]
         table.append(f'| {name} | ' + ' | '.join(cells) + ' |')
     return [f'{len(rows)} starts, {len(adm)} admissible: {counts["bound"]} bound (in contact in each of the last '
             f'{tail} periods: the pair keeps colliding to the end), {counts["repelled"]} repelled (centres farther '
