@@ -15,6 +15,7 @@ setup(
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
         ('share/' + package_name + '/config/experiments', glob('config/experiments/*.yaml')),
+        ('share/' + package_name + '/config', glob('config/*.csv')),
     ],
     install_requires=['setuptools'],
     zip_safe=True,

@@ -22,13 +22,15 @@ from smarticle_common.gait import GaitConfig
 from smarticle_feedback.collisions import (CollisionRecord, find_events, format_events, format_signature,
                                            plot_events, signature, write_events_csv)
 
-from .p6 import C2_START, STARTS, c2_scene, p6_noise
+from .p6 import C2_START, HELD, START_NAMES, c2_scene, held_scene, p6_noise, start_base
 
 
 def record_pair(seed: int = 0, periods: float = 40.0, alpha_max_deg: float = 90.0, preset: str = 'feedback',
-                base: tuple[float, float, float, tuple[float, float]] = C2_START, noise: Any = None) -> CollisionRecord:
+                base: tuple[float, float, float, tuple[float, float]] | str = C2_START,
+                noise: Any = None) -> CollisionRecord:
     """Run the seed's C2 start open loop for ``periods`` and record every physics step.
 
+    ``base``: pair coordinates and phases (``p6.STARTS``) or ``p6.HELD`` (the seed's held-C2 state).
     ``noise``: a ``NoiseConfig`` (None: off), its draws from ``seed`` unless it names its own, as in P6.
     """
     from smarticle_common.pairs import pair_coordinates
@@ -40,7 +42,14 @@ def record_pair(seed: int = 0, periods: float = 40.0, alpha_max_deg: float = 90.
     if noise is not None:
         config = config.with_noise(noise)   # the pair scene carries the trial seed its draws take
     gait = GaitConfig.from_degrees(alpha_max_deg, servo_speed=config.robot.servo_speed)
-    scene, _ = c2_scene(config, gait, seed, base)
+    if base == HELD:
+        scene, _ = held_scene(config, gait, seed)
+        phases = (0.0, 0.0)
+    elif isinstance(base, str):
+        raise ValueError(f'base must be pair coordinates or {HELD!r}, got {base!r}')
+    else:
+        scene, _ = c2_scene(config, gait, seed, base)
+        phases = base[3]
     times: list[float] = []
     fsr: list[np.ndarray] = []
     links: list[np.ndarray] = []
@@ -64,7 +73,7 @@ def record_pair(seed: int = 0, periods: float = 40.0, alpha_max_deg: float = 90.
     coords = pair_coordinates(np.asarray(poses))
     return CollisionRecord(np.asarray(times), np.asarray(fsr), np.asarray(links),
                            coords.r[:, 0] / config.robot.body_length, gait.period,
-                           (float(base[3][0]), float(base[3][1])), clock_rates=(float(rates[0]), float(rates[1])))
+                           (float(phases[0]), float(phases[1])), clock_rates=(float(rates[0]), float(rates[1])))
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -74,14 +83,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument('--periods', type=float, default=40.0)
     parser.add_argument('--alpha', type=float, default=90.0, help='alpha_max (deg)')
     parser.add_argument('--rows', type=int, default=24, help='events shown in the table on stdout')
-    parser.add_argument('--start', choices=sorted(STARTS), default='harvested',
-                        help='the P6 start (default harvested; colliding: robot 2 a quarter period ahead)')
+    parser.add_argument('--start', choices=sorted(START_NAMES), default='harvested',
+                        help='the P6 start (default harvested; held: the state of a C2 held by collisions; '
+                             'colliding: robot 2 a quarter period ahead)')
     parser.add_argument('--noise', choices=['paper', 'none'], default='paper',
                         help='noise with a cause, as in P6 (default paper)')
     parser.add_argument('--out', default='out/feedback/c2', help='output folder')
     args = parser.parse_args(argv)
     out = Path(args.out)
-    rec = record_pair(args.seed, args.periods, args.alpha, base=STARTS[args.start], noise=p6_noise(args.noise))
+    rec = record_pair(args.seed, args.periods, args.alpha, base=start_base(args.start), noise=p6_noise(args.noise))
     rec.save(out / 'c2_steps.npz')
     events = find_events(rec)
     write_events_csv(events, out / 'c2_events.csv')

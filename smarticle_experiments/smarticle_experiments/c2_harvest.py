@@ -24,9 +24,11 @@ from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from smarticle_common.facts import R_BIND_BL
+from smarticle_sim.scenes import STATE_FIELDS, RobotPlacement, RobotState
 
 #: Periods skipped at the start of each glider (it settles onto its limit cycle first).
 SETTLE_PERIODS = 5
@@ -46,6 +48,24 @@ class C2Sample:
     theta_deg: float
     phi_deg: float
     touched: bool = False   # the two robots touched at some physics step of the period that starts here
+    #: The two robots' full state at this period boundary (robot i, then j), from which a new trial can start
+    #: (``smarticle_sim.scenes.state_scene``); None when not recorded.
+    state: tuple[RobotPlacement, RobotPlacement] | None = None
+
+
+class PeriodSnapshots:
+    """A controller that keeps every robot's full state (``Physics.placements``) at each gait period boundary."""
+
+    def __init__(self, period: float, start_time: float = 0.0) -> None:
+        self.period = period
+        self.start_time = start_time
+        self.states: dict[int, tuple[RobotPlacement, ...]] = {}
+
+    def before_tick(self, runner: Any) -> None:
+        """At a period boundary (the tick's time within 1e-9 s of one), keep the state."""
+        k = round((runner.time - self.start_time) / self.period)
+        if abs(runner.time - self.start_time - k * self.period) < 1e-9 and k not in self.states:
+            self.states[k] = runner.physics.placements()
 
 
 def harvest_trial(seed: int, periods: float = 150.0, preset: str = 'feedback', alpha_max_deg: float = 90.0,
@@ -64,8 +84,9 @@ def harvest_trial(seed: int, periods: float = 150.0, preset: str = 'feedback', a
     gait = GaitConfig.from_degrees(alpha_max_deg, servo_speed=config.robot.servo_speed)
     scene = dense_scene(config.robot, gait, n=robots, seed=seed)
     watch = ContactPeriods(gait.period)   # contacts at every physics step (a kick lasts one to a few steps)
+    snapshots = PeriodSnapshots(gait.period)   # reads only: the trajectory is the same
     rec = run_trial(config, scene, periods, sample_every=sample_every, record_contacts=False,
-                    controllers=lambda physics, gaits: [watch])
+                    controllers=lambda physics, gaits: [watch, snapshots])
     cfg = GliderConfig(period=gait.period, r_bind=R_BIND_BL * bl, min_periods=min_periods, body_length=bl, width=bl)
     analysis = analyse_gliders(rec.time, rec.poses, cfg, t0=0.0)
     samples: list[C2Sample] = []
@@ -78,7 +99,9 @@ def harvest_trial(seed: int, periods: float = 150.0, preset: str = 'feedback', a
                 continue
             a, b, (r, theta, phi) = front_order(g.i, g.j, rec.poses[idx])
             touched = k in watch.periods.get((min(g.i, g.j), max(g.i, g.j)), set())
-            samples.append(C2Sample(seed, a, b, k, r / bl, theta, phi, touched))
+            state = snapshots.states.get(k)
+            samples.append(C2Sample(seed, a, b, k, r / bl, theta, phi, touched,
+                                    (state[a], state[b]) if state is not None else None))
     return samples
 
 
@@ -155,16 +178,78 @@ def format_summary(s: dict[str, float], touching: dict[str, float] | None = None
     return '\n'.join(rows)
 
 
+#: Columns of one robot's state in the samples CSV (prefixed ``a_`` for robot i, ``b_`` for robot j).
+ROBOT_COLUMNS: tuple[str, ...] = ('x', 'y', 'heading', 'alpha1', 'alpha2', *STATE_FIELDS)
+#: Columns of the samples CSV.
+CSV_COLUMNS: tuple[str, ...] = ('seed', 'i', 'j', 'period', 'r_bl', 'theta_deg', 'phi_deg', 'touched',
+                                *(f'{who}_{c}' for who in 'ab' for c in ROBOT_COLUMNS))
+
+
 def write_csv(samples: Sequence[C2Sample], path: Path) -> Path:
-    """Every sample as a CSV row."""
+    """Every sample as a CSV row, with the pair's full state (``ROBOT_COLUMNS`` of robots i and j; empty when
+    not recorded). Floats are written with ``repr``: a start read back is the state to the last bit."""
     path.parent.mkdir(parents=True, exist_ok=True)
     with path.open('w', newline='') as fh:
         writer = csv.writer(fh)
-        writer.writerow(['seed', 'i', 'j', 'period', 'r_bl', 'theta_deg', 'phi_deg', 'touched'])
+        writer.writerow(CSV_COLUMNS)
         for s in samples:
+            state: list[object] = [''] * (2 * len(ROBOT_COLUMNS))
+            if s.state is not None:
+                state = [repr(float(v)) for p in s.state
+                         for v in (p.x, p.y, p.heading, p.alpha1, p.alpha2, *(p.state.values() if p.state else ()))]
             writer.writerow([s.seed, s.i, s.j, s.period, f'{s.r_bl:.5f}', f'{s.theta_deg:.3f}', f'{s.phi_deg:.3f}',
-                             int(s.touched)])
+                             int(s.touched), *state])
     return path
+
+
+def read_csv(path: str | Path) -> list[C2Sample]:
+    """The samples of a CSV of ``write_csv`` (with their states when the file has them). ValueError names the
+    file and line of a row that cannot be read."""
+    out: list[C2Sample] = []
+    with Path(path).open(newline='') as fh:
+        reader = csv.DictReader(fh)
+        missing = [c for c in CSV_COLUMNS[:7] if c not in (reader.fieldnames or [])]
+        if missing:
+            raise ValueError(f'{path}: not a C2 samples file (no column {missing[0]!r})')
+        for line, row in enumerate(reader, start=2):
+            try:
+                state = None
+                if row.get('a_x'):
+                    pair = []
+                    for who in 'ab':
+                        v = [float(row[f'{who}_{c}']) for c in ROBOT_COLUMNS]
+                        pair.append(RobotPlacement(v[0], v[1], v[2], v[3], v[4], None, RobotState.from_values(v[5:])))
+                    state = (pair[0], pair[1])
+                out.append(C2Sample(int(row['seed']), int(row['i']), int(row['j']), int(row['period']),
+                                    float(row['r_bl']), float(row['theta_deg']), float(row['phi_deg']),
+                                    bool(int(row.get('touched') or 0)), state))
+            except (KeyError, TypeError, ValueError) as exc:
+                raise ValueError(f'{path}, line {line}: {exc}') from None
+    return out
+
+
+#: A glider is "held by collisions" if its robots touched in at least this share of its sampled periods.
+HELD_SHARE = 0.5
+#: Of a held glider's samples with contact, every this many-th is a start (consecutive periods of one glider
+#: are nearly the same state; this keeps the shipped file small).
+HELD_EVERY = 5
+
+
+def held_starts(samples: Sequence[C2Sample], share: float = HELD_SHARE, every: int = HELD_EVERY) -> list[C2Sample]:
+    """The starts of P6's ``held`` condition: of every C2 glider whose robots touched in at least ``share`` of
+    its sampled periods (held by its collisions, as the paper's enveloping C2), the samples with contact and
+    a recorded state, every ``every``-th of them (the first, the ``every + 1``-th, ...), in file order."""
+    if every < 1:
+        raise ValueError(f'every must be >= 1, got {every!r}')
+    gliders: dict[tuple[int, int, int], list[C2Sample]] = {}
+    for s in samples:
+        gliders.setdefault((s.seed, min(s.i, s.j), max(s.i, s.j)), []).append(s)
+    out: list[C2Sample] = []
+    for group in gliders.values():
+        if sum(x.touched for x in group) >= share * len(group):
+            out += [s for s in group if s.touched and s.state is not None][::every]
+    order = {id(s): k for k, s in enumerate(samples)}
+    return sorted(out, key=lambda s: order[id(s)])
 
 
 def plot(samples: Sequence[C2Sample], path: Path) -> Path:
@@ -226,6 +311,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     touched = [x for x in samples if x.touched]
     print(format_summary(s, summary(touched) if touched else None))
     out = Path(args.out)
+    held = held_starts(samples)
+    print(f'\n{len(held)} starts of {len({(x.seed, x.i, x.j) for x in held})} C2 gliders held by collisions '
+          f'(touched in >= {HELD_SHARE:.0%} of their periods; every {HELD_EVERY}th period with contact): '
+          f'{out / "c2_held_starts.csv"}')
+    write_csv(held, out / 'c2_held_starts.csv')
     print(f'wrote {write_csv(samples, out / "c2_samples.csv")} and {plot(samples, out / "c2_harvest.png")}')
     return 0
 

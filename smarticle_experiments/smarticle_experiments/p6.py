@@ -41,8 +41,68 @@ C2_START = (1.47, 99.0, 7.0, (0.0, 0.0))
 #: phase p = 0.25, side by side): the earlier P6 start, kept for the tests of the feedback paths, which
 #: need halts within a few periods, and as ``--start colliding``.
 COLLIDING_START = (1.3, 0.0, 350.0, (0.0, 0.25))
-#: The named starts of ``smarticle-p6 --start`` and ``smarticle-c2-collisions --start``.
+#: The named starts of ``smarticle-p6 --start`` and ``smarticle-c2-collisions --start`` placed from pair
+#: coordinates.
 STARTS = {'harvested': C2_START, 'colliding': COLLIDING_START}
+#: The start taken from the full state of C2 gliders held by collisions in dense runs (``held_scene``).
+HELD = 'held'
+#: Every start name: ``STARTS`` and ``HELD``.
+START_NAMES: tuple[str, ...] = (*STARTS, HELD)
+#: The shipped starts of ``HELD``: ``smarticle-c2-harvest --seeds 5000-5039 --periods 150`` wrote them
+#: (``c2_held_starts.csv``); see docs/feedback.md "Starting from the held C2".
+HELD_STARTS_FILE = 'p6_held_c2.csv'
+
+
+def start_base(name: str) -> tuple[float, float, float, tuple[float, float]] | str:
+    """The ``base`` of ``run_pair_trial`` for a start name (ValueError naming the known ones)."""
+    if name == HELD:
+        return HELD
+    if name not in STARTS:
+        raise ValueError(f'start must be one of {", ".join(START_NAMES)}, got {name!r}')
+    return STARTS[name]
+
+
+def held_starts_path() -> Path:
+    """The shipped held-C2 starts (config of the package: source tree or install share)."""
+    here = Path(__file__).resolve().parent.parent / 'config' / HELD_STARTS_FILE
+    if here.is_file():
+        return here
+    try:
+        from ament_index_python.packages import get_package_share_directory
+
+        return Path(get_package_share_directory('smarticle_experiments')) / 'config' / HELD_STARTS_FILE
+    except (ImportError, LookupError, ValueError):
+        return here
+
+
+_HELD_CACHE: dict[str, list[Any]] = {}
+
+
+def load_held_starts(path: str | Path | None = None) -> list[Any]:
+    """The held-C2 starts (``C2Sample`` with state) of ``path`` (default: the shipped file), read once per
+    process. ValueError if the file has no start with a state."""
+    from smarticle_experiments.c2_harvest import read_csv
+
+    key = str(path or held_starts_path())
+    if key not in _HELD_CACHE:
+        starts = [s for s in read_csv(key) if s.state is not None]
+        if not starts:
+            raise ValueError(f'{key}: no start with a recorded state')
+        _HELD_CACHE[key] = starts
+    return _HELD_CACHE[key]
+
+
+def held_scene(config: Any, gait: GaitConfig, seed: int, path: str | Path | None = None
+               ) -> tuple[Any, tuple[float, float, float]]:
+    """The pair scene of the seed's held-C2 start: the start drawn uniformly (``numpy`` generator of the seed)
+    from ``load_held_starts(path)``, both robots at their recorded state, centred on the plate, each gait at
+    its phase 0 (a period boundary of an in-phase run), and that start (r BL, theta deg, phi deg)."""
+    from smarticle_sim.scenes import state_scene
+
+    starts = load_held_starts(path)
+    pick = starts[int(np.random.default_rng(seed).integers(len(starts)))]
+    scene = state_scene(pick.state, [gait, gait], name='held-c2', seed=seed)
+    return scene, (pick.r_bl, pick.theta_deg, pick.phi_deg)
 #: Seeded jitter of the start (r in BL, theta and phi in deg).
 C2_JITTER = (0.04, 4.0, 4.0)
 #: Draws of the jittered start before giving up when they overlap (robots' arms at the start phases).
@@ -146,7 +206,7 @@ def pair_lifetime(times: np.ndarray, poses: np.ndarray, period: float, body_leng
 
 def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: FeedbackConfig | None = None,
                    preset: str = 'feedback', start_time: float = 0.0,
-                   base: tuple[float, float, float, tuple[float, float]] = C2_START,
+                   base: tuple[float, float, float, tuple[float, float]] | str = C2_START,
                    r_bind_bl: float = R_BIND_BL, sample_every: int = 3, record_samples: bool = False,
                    robot_changes: Mapping[str, float] | None = None, count_contacts: bool = False,
                    noise: Any = None, physics_changes: Mapping[str, Any] | None = None) -> PairTrial:
@@ -157,6 +217,7 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
     ``count_contacts`` lists the gait periods in which the robots touched at any physics step
     (``PairTrial.contact_periods``; a step hook, the trajectory is the same).
     ``noise`` is a ``NoiseConfig`` (None: off); its draws take the trial ``seed`` unless it names its own.
+    ``base`` is a start's pair coordinates (``STARTS``) or ``HELD``: the full state of a held C2 (``held_scene``).
     """
     from smarticle_sim.batch import run_trial
     from smarticle_sim.physics import Physics
@@ -173,7 +234,14 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
     if noise is not None:
         config = config.with_noise(noise)   # the pair scene carries the trial seed its draws take
     gait = GaitConfig.from_degrees(condition.alpha_max_deg, servo_speed=config.robot.servo_speed)
-    scene, (r, theta, phi) = c2_scene(config, gait, seed, base)
+    if isinstance(base, str):
+        if base != HELD:
+            raise ValueError(f'base must be pair coordinates or {HELD!r}, got {base!r}')
+        scene, (r, theta, phi) = held_scene(config, gait, seed)
+        phases = (0.0, 0.0)
+    else:
+        scene, (r, theta, phi) = c2_scene(config, gait, seed, base)
+        phases = base[3]
     feedback_controllers: list[FeedbackController] = []
 
     # every manifold point between the two robots counts, as the contact tables of docs/feedback.md were made
@@ -184,7 +252,7 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
         if not condition.feedback:
             return extra
         fb = feedback or default_feedback_config()
-        policies = {k: ImpactController(replace(fb, period=gait.period, phase=p)) for k, p in enumerate(base[3])}
+        policies = {k: ImpactController(replace(fb, period=gait.period, phase=p)) for k, p in enumerate(phases)}
         for policy in policies.values():
             policy.start(start_time)
         feedback_controllers.append(FeedbackController(gaits, policies, record=record_samples))
@@ -239,7 +307,7 @@ def windows_file(path: str | Path) -> FeedbackConfig:
 
 def _run(args: tuple[Condition, int, float, bool, str, str, FeedbackConfig | None, dict[str, Any]]) -> PairTrial:
     condition, seed, periods, contacts, start, noise, feedback, physics = args
-    return run_pair_trial(condition, seed, periods, feedback=feedback, count_contacts=contacts, base=STARTS[start],
+    return run_pair_trial(condition, seed, periods, feedback=feedback, count_contacts=contacts, base=start_base(start),
                           noise=p6_noise(noise), physics_changes=physics)
 
 
@@ -251,8 +319,7 @@ def run_p6(conditions: Sequence[Condition], seeds: Sequence[int], periods: float
     the named ``start`` (``STARTS``) with the named ``noise`` (``p6_noise``); the feedback conditions use
     ``feedback`` (default: the shipped windows, ``default_feedback_config``); ``physics`` replaces fields of
     the ``PhysicsConfig``."""
-    if start not in STARTS:
-        raise ValueError(f'start must be one of {", ".join(STARTS)}, got {start!r}')
+    start_base(start)
     p6_noise(noise)
     changes = dict(physics or {})
     work = [(c, s, periods, contacts, start, noise, feedback, changes) for c in conditions for s in seeds]
@@ -465,9 +532,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument('--out', default='out/feedback', help='output folder')
     parser.add_argument('--contacts', action='store_true',
                         help='also count the periods in which the robots touch (a step hook per trial)')
-    parser.add_argument('--start', choices=sorted(STARTS), default='harvested',
-                        help='harvested: where the C2 gliders of dense runs live (default); colliding: the earlier '
-                             'start, robot 2 a quarter period ahead')
+    parser.add_argument('--start', choices=sorted(START_NAMES), default='harvested',
+                        help='harvested: where the C2 gliders of dense runs live (default); held: the full state of '
+                             'a C2 glider held by collisions in a dense run (seeded pick of the shipped starts); '
+                             'colliding: the earlier start, robot 2 a quarter period ahead')
     parser.add_argument('--noise', choices=['paper', 'none'], default='paper',
                         help='noise with a cause: paper (the cited defaults, default) or none')
     parser.add_argument('--windows', default=None,

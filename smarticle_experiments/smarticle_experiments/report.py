@@ -534,13 +534,27 @@ def section_step_convergence(ctx: Context) -> list[str]:
             '![step convergence](step_convergence.png)']
 
 
+def logrank_p(a: Sequence[Mapping[str, Any]], b: Sequence[Mapping[str, Any]]) -> tuple[float, float]:
+    """Log-rank test (scipy.stats.logrank) of two groups of trial results with ``lifetime_periods`` and
+    ``censored``: (statistic, p)."""
+    from scipy.stats import CensoredData, logrank
+
+    def data(rows: Sequence[Mapping[str, Any]]) -> CensoredData:
+        life = np.array([r['lifetime_periods'] for r in rows], dtype=float)
+        cens = np.array([bool(r['censored']) for r in rows], dtype=bool)
+        return CensoredData(uncensored=life[~cens], right=life[cens])
+
+    res = logrank(data(a), data(b))
+    return float(res.statistic), float(res.pvalue)
+
+
 def section_p6(ctx: Context) -> list[str]:
     """Fig. 5d / P6: C2 lifetimes open loop against feedback (Kaplan-Meier, censored at the trial's end)."""
     groups: dict[tuple[float, bool], list[dict[str, Any]]] = defaultdict(list)
     for t, r in ctx.ok():
         groups[(float(t.params['alpha_max_deg']), bool(t.params['feedback']))].append(r)
-    lines = ['| condition | trials | reached the end | KM median lifetime (periods) [95 %] | mean halts |',
-             '| --- | ---: | ---: | --- | ---: |']
+    lines = ['| condition | trials | reached the end | KM median lifetime (periods) [95 %] | mean lifetime +- SE | '
+             'mean halts |', '| --- | ---: | ---: | --- | ---: | ---: |']
     fig = figure(11, 4.5)
     ax1, ax2 = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
     medians: dict[tuple[float, bool], Estimate] = {}
@@ -548,9 +562,10 @@ def section_p6(ctx: Context) -> list[str]:
         label = f'{"feedback" if cond[1] else "open loop"} {cond[0]:g} deg'
         km = kaplan_meier([r['lifetime_periods'] for r in rows], [bool(r['censored']) for r in rows])
         medians[cond] = km.median
-        lines.append(f'| {label} | {len(rows)} | {km.censored} | {km.median.text(".0f")} | '
-                     f'{np.mean([r["halts"] for r in rows]):.1f} |')
         life = np.array([r['lifetime_periods'] for r in rows], dtype=float)
+        se = life.std(ddof=1) / np.sqrt(life.size) if life.size > 1 else float('nan')
+        lines.append(f'| {label} | {len(rows)} | {km.censored} | {km.median.text(".0f")} | {life.mean():.1f} +- '
+                     f'{se:.1f} | {np.mean([r["halts"] for r in rows]):.1f} |')
         ax1.scatter(x + np.linspace(-0.15, 0.15, life.size), life, s=12)
         ax2.step(np.r_[0, km.times], np.r_[1, km.survival], where='post', label=label)
     ax1.set_xticks(range(len(groups)), [f'{"fb" if c[1] else "ol"} {c[0]:g}' for c in sorted(groups)], fontsize=8)
@@ -559,6 +574,14 @@ def section_p6(ctx: Context) -> list[str]:
     ax2.set_ylabel('survival (Kaplan-Meier)')
     legend(ax2, 7)
     ctx.save(fig, 'p6_lifetimes')
+    for (alpha, feedback), rows in sorted(groups.items()):
+        plain = groups.get((alpha, False))
+        if feedback and plain:
+            stat, p = logrank_p(plain, rows)
+            ratio = (np.mean([r['lifetime_periods'] for r in rows])
+                     / max(float(np.mean([r['lifetime_periods'] for r in plain])), 1e-9))
+            lines.append(f'\nLog-rank (censored lifetimes), open loop against feedback at {alpha:g} deg: statistic '
+                         f'{stat:.3f}, p = {p:.3g}; mean lifetime ratio feedback / open loop {ratio:.2f}.')
     fb = [m for (_, f), m in medians.items() if f]
     ol = [m for (_, f), m in medians.items() if not f]
     if fb and ol:

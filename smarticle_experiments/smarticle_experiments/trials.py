@@ -244,11 +244,11 @@ def single_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
 
 def p6_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
     """P6: a C2 pair of the feedback robot, open loop or with impact-halt feedback (the feedback package's trial)."""
-    from smarticle_experiments.p6 import STARTS, Condition, run_pair_trial
+    from smarticle_experiments.p6 import Condition, run_pair_trial, start_base
 
     noise = replace(NoiseConfig.none(), **noise_mapping(p.get('noise'))) if p.get('noise') else None
     trial = run_pair_trial(Condition(float(p['alpha_max_deg']), bool(p['feedback'])), seed, float(p['periods']),
-                           base=STARTS[str(p['start'])], noise=noise)
+                           base=start_base(str(p['start'])), noise=noise)
     return {'lifetime_periods': int(trial.lifetime_periods), 'censored': bool(trial.censored),
             'halts': len(trial.halts), 'trouble': trial.trouble,
             'r0_bl': trial.start[0], 'theta0_deg': trial.start[1], 'phi0_deg': trial.start[2],
@@ -356,10 +356,10 @@ def validate_params(kind: str, params: Mapping[str, Any]) -> None:
         return
     try:
         if kind == 'p6':
-            from smarticle_experiments.p6 import STARTS
+            from smarticle_experiments.p6 import START_NAMES
 
-            if params['start'] not in STARTS:
-                raise SpecError(f'params.start must be one of {", ".join(STARTS)}, got {params["start"]!r}')
+            if params['start'] not in START_NAMES:
+                raise SpecError(f'params.start must be one of {", ".join(START_NAMES)}, got {params["start"]!r}')
             replace(NoiseConfig.none(), **noise_mapping(params.get('noise')))
             return
         config = config_of(params)

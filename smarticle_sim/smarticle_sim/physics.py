@@ -35,7 +35,7 @@ from smarticle_common.topics import FSR_FACES
 from .settings import PhysicsConfig, SimConfig
 from .errors import SceneError, SimError
 from .noise import FrictionField
-from .scenes import Scene
+from .scenes import RobotPlacement, RobotState, Scene
 from .trouble import check_penetration, check_state
 
 #: Joint index of arm 1 and arm 2 (also their link indices); the body is link -1.
@@ -133,10 +133,12 @@ class Physics:
         ident = [0.0, 0.0, 0.0, 1.0]
         ids = []
         for placement in self.scene.robots:
+            state = placement.state
+            z = h / 2.0 if state is None else state.z
             yaw = placement.heading - math.pi / 2.0
             body = c.createMultiBody(
-                spec.body_mass, body_shape, body_visual, [placement.x, placement.y, h / 2.0],
-                c.getQuaternionFromEuler([0.0, 0.0, yaw]),
+                spec.body_mass, body_shape, body_visual, [placement.x, placement.y, z],
+                c.getQuaternionFromEuler([0.0, 0.0, yaw]) if state is None else state.orientation,
                 linkMasses=[spec.arm_mass, spec.arm_mass], linkCollisionShapeIndices=arm_shapes,
                 linkVisualShapeIndices=arm_visuals,
                 linkPositions=[[-w / 2, 0.0, arm_z], [w / 2, 0.0, arm_z]], linkOrientations=[ident, ident],
@@ -161,8 +163,13 @@ class Physics:
             if not ph.arm_plate_collision:
                 for j in ARM_JOINTS:
                     c.setCollisionFilterPair(body, self.plate_id, j, -1, 0)
-            c.resetJointState(body, ARM_JOINTS[0], placement.alpha1)
-            c.resetJointState(body, ARM_JOINTS[1], placement.alpha2)
+            if state is None:
+                c.resetJointState(body, ARM_JOINTS[0], placement.alpha1)
+                c.resetJointState(body, ARM_JOINTS[1], placement.alpha2)
+            else:   # a start taken from a running trial: its velocities too
+                c.resetJointState(body, ARM_JOINTS[0], placement.alpha1, targetVelocity=state.arm_velocities[0])
+                c.resetJointState(body, ARM_JOINTS[1], placement.alpha2, targetVelocity=state.arm_velocities[1])
+                c.resetBaseVelocity(body, linearVelocity=state.velocity, angularVelocity=state.angular_velocity)
             ids.append(body)
         self.body_ids: tuple[int, ...] = tuple(ids)
         self._robot_of_body = {b: k for k, b in enumerate(ids)}
@@ -303,6 +310,23 @@ class Physics:
     def arm_velocities(self) -> np.ndarray:
         """(N, 2) arm angular velocities (rad/s)."""
         return self.state().arm_velocities
+
+    def placements(self) -> tuple[RobotPlacement, ...]:
+        """Every robot's full state now as a placement (pose, arm angles, ``RobotState``; the scene's gait):
+        a scene of them (``scenes.state_scene``) starts a new world where this one is."""
+        c = self._client
+        pos, quat = self._read_bases()
+        heading, _ = body_headings_and_tilts(quat)
+        out = []
+        for k, body in enumerate(self.body_ids):
+            lin, ang = c.getBaseVelocity(body)
+            (a1, v1, _, _), (a2, v2, _, _) = c.getJointStates(body, ARM_JOINTS)
+            state = RobotState(float(pos[k, 2]), tuple(float(q) for q in quat[k]),  # type: ignore[arg-type]
+                               tuple(float(v) for v in lin), tuple(float(w) for w in ang),  # type: ignore[arg-type]
+                               (float(v1), float(v2)))
+            out.append(RobotPlacement(float(pos[k, 0]), float(pos[k, 1]), float(heading[k]), float(a1), float(a2),
+                                      self.scene.robots[k].gait, state))
+        return tuple(out)
 
     def body_xy(self) -> np.ndarray:
         """(N, 2) body centre x, y (m): from the cached state if there is one, else one read per robot."""

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -17,6 +18,39 @@ from .geometry import Rect, rect_corners, robot_rects, robots_overlap
 DEFAULT_GAP = 0.001
 
 
+#: Names of ``RobotState.values`` (CSV columns of a saved state).
+STATE_FIELDS: tuple[str, ...] = ('z', 'qx', 'qy', 'qz', 'qw', 'vx', 'vy', 'vz', 'wx', 'wy', 'wz',
+                                 'dalpha1', 'dalpha2')
+
+
+@dataclass(frozen=True)
+class RobotState:
+    """The rest of a robot's dynamic state, for a start taken from a running trial (``Physics.placements``).
+
+    With it the robot starts with this body height and orientation (a tilted body stays tilted) and these
+    velocities instead of at rest, flat on the plate.
+    """
+
+    z: float                                       # body centre height (m)
+    orientation: tuple[float, float, float, float]  # body quaternion (x, y, z, w); its yaw is the heading's
+    velocity: tuple[float, float, float]           # body centre velocity (m/s)
+    angular_velocity: tuple[float, float, float]   # body angular velocity (rad/s)
+    arm_velocities: tuple[float, float]            # d alpha1 / dt, d alpha2 / dt (rad/s)
+
+    def values(self) -> tuple[float, ...]:
+        """All 13 numbers, in the order of ``STATE_FIELDS``."""
+        return (self.z, *self.orientation, *self.velocity, *self.angular_velocity, *self.arm_velocities)
+
+    @classmethod
+    def from_values(cls, values: Sequence[float]) -> RobotState:
+        """The inverse of ``values``."""
+        v = [float(x) for x in values]
+        if len(v) != len(STATE_FIELDS) or not all(math.isfinite(x) for x in v):
+            raise SceneError(f'a robot state has {len(STATE_FIELDS)} finite numbers (z, quaternion, velocity, '
+                             f'angular velocity, arm velocities), got {v}')
+        return cls(v[0], (v[1], v[2], v[3], v[4]), (v[5], v[6], v[7]), (v[8], v[9], v[10]), (v[11], v[12]))
+
+
 @dataclass(frozen=True)
 class RobotPlacement:
     """Initial pose (x, y in m, heading of the body normal in rad), arm angles and optional gait core."""
@@ -27,6 +61,7 @@ class RobotPlacement:
     alpha1: float = 0.0
     alpha2: float = 0.0
     gait: GaitConfig | None = None   # None: the robot follows external joint commands
+    state: RobotState | None = None  # None: at rest, flat on the plate
 
     def rects(self, spec: RobotSpec) -> tuple[Rect, Rect, Rect]:
         """Footprint rectangles (body, arm 1, arm 2) of this placement."""
@@ -40,9 +75,14 @@ class Scene:
     robots: tuple[RobotPlacement, ...]
     name: str = 'custom'
     seed: int | None = None
+    #: Footprints may overlap by this much (m): a start taken from a running trial holds its contacts as
+    #: deep as the solver left them (``state_scene``). 0 for every scene built from scratch.
+    overlap_tolerance: float = 0.0
 
     def validate(self, spec: RobotSpec, plate_size: float, gap: float = 0.0) -> None:
-        """Raise SceneError if a value is not finite, a robot hangs off the plate or two robots overlap."""
+        """Raise SceneError if a value is not finite, a robot hangs off the plate or two robots overlap
+        (by more than ``overlap_tolerance``)."""
+        gap -= self.overlap_tolerance
         if not self.robots:
             raise SceneError(f'scene {self.name!r} has no robots')
         half = plate_size / 2.0
@@ -151,6 +191,28 @@ def pair_scene(spec: RobotSpec, gait: GaitConfig, r: float, theta: float, phi: f
     scene = Scene((_placement(*pose1, g1), _placement(*pose2, g2)), name='pair', seed=seed)
     scene.validate(spec, math.inf)
     return scene
+
+
+def state_scene(placements: Sequence[RobotPlacement], gaits: Sequence[GaitConfig | None], name: str = 'state',
+                seed: int | None = None, centre: tuple[float, float] = (0.0, 0.0),
+                overlap_tolerance: float = 0.002) -> Scene:
+    """Robots that start where a running trial left them (``Physics.placements``), moved together so their
+    mean centre is at ``centre``, with these gaits (a period boundary of the old trial: each gait starts at its
+    phase). Footprints may overlap by ``overlap_tolerance`` (m, default 2 mm): the contacts of the old trial.
+    Raises SceneError if a placement has no ``state`` or the robots overlap by more.
+    """
+    if len(placements) != len(gaits):
+        raise SceneError(f'state_scene: {len(placements)} placements but {len(gaits)} gaits')
+    if not placements:
+        raise SceneError('state_scene: no robots')
+    for k, p in enumerate(placements):
+        if p.state is None:
+            raise SceneError(f'state_scene: placement {k} has no state (take it from Physics.placements)')
+    mean = np.mean([(p.x, p.y) for p in placements], axis=0)
+    dx, dy = centre[0] - float(mean[0]), centre[1] - float(mean[1])
+    robots = tuple(RobotPlacement(p.x + dx, p.y + dy, p.heading, p.alpha1, p.alpha2, g, p.state)
+                   for p, g in zip(placements, gaits, strict=True))
+    return Scene(robots, name=name, seed=seed, overlap_tolerance=overlap_tolerance)
 
 
 def random_scene(spec: RobotSpec, gait: GaitConfig, n: int, seed: int = 0, region: float = 0.3,

@@ -59,3 +59,51 @@ def test_the_summary_says_how_many_samples_had_contact_and_where_those_pairs_sit
     assert '| r (BL) | 1.350 | 1.275 - 1.425 | 1.250 | 1.225 - 1.275 |' in text
     assert 'In 2 of them (50%) the pair touched during the period (1 gliders, 1 trials).' in text
     assert 'periods with contact' not in format_summary(summary(samples))
+
+
+def test_the_harvest_keeps_each_samples_pair_state_and_the_csv_gives_it_back_to_the_bit(tmp_path) -> None:
+    from smarticle_experiments.c2_harvest import read_csv, write_csv
+
+    from smarticle_sim.settings import SimConfig
+
+    bl = SimConfig.from_preset('feedback').robot.body_length
+    samples = harvest_trial(5002, periods=20.0, min_periods=5, settle=1)
+    assert samples and all(s.state is not None for s in samples)
+    for s in samples:
+        a, b = s.state
+        assert math.hypot(a.x - b.x, a.y - b.y) / bl == pytest.approx(s.r_bl, abs=1e-4)
+        assert a.state is not None and 0.0 < a.state.z < 0.05
+    back = read_csv(write_csv(samples, tmp_path / 'c2.csv'))
+
+    def state(s: C2Sample) -> list[tuple[object, ...]]:
+        assert s.state is not None
+        return [(p.x, p.y, p.heading, p.alpha1, p.alpha2, p.state) for p in s.state]
+
+    # every state float written with repr: the same state, bit for bit (the gait is the trial's, not the file's)
+    assert [state(s) for s in back] == [state(s) for s in samples]
+    assert [(s.seed, s.i, s.j, s.period, s.touched) for s in back] == [(s.seed, s.i, s.j, s.period, s.touched)
+                                                                       for s in samples]
+    # a file of an older harvest (no state columns) still reads, without states
+    old = tmp_path / 'old.csv'
+    old.write_text('seed,i,j,period,r_bl,theta_deg,phi_deg,touched\n1,0,1,7,1.2,90.0,3.0,1\n')
+    assert read_csv(old) == [C2Sample(1, 0, 1, 7, 1.2, 90.0, 3.0, True, None)]
+    bad = tmp_path / 'bad.csv'
+    bad.write_text('seed,i,j,period,r_bl,theta_deg,phi_deg,touched\n1,0,x,7,1.2,90.0,3.0,1\n')
+    with pytest.raises(ValueError, match='line 2'):
+        read_csv(bad)
+    with pytest.raises(ValueError, match='not a C2 samples file'):
+        read_csv(tmp_path.joinpath('x.csv').write_text('a,b\n1,2\n') and tmp_path / 'x.csv')
+
+
+def test_held_starts_are_the_contact_periods_of_gliders_that_touch_in_half_their_periods() -> None:
+    from smarticle_experiments.c2_harvest import held_starts
+
+    state = object()   # any recorded state
+    often = [C2Sample(1, 0, 1, k, 1.0, 90.0, 0.0, k % 4 != 0, state) for k in range(8)]     # touched 6 of 8
+    seldom = [C2Sample(2, 3, 4, k, 1.4, 90.0, 0.0, k == 0, state) for k in range(8)]       # touched 1 of 8
+    no_state = [C2Sample(3, 0, 1, k, 1.0, 90.0, 0.0, True, None) for k in range(2)]
+    held = held_starts(often + seldom + no_state, every=1)      # type: ignore[arg-type]
+    assert held == [s for s in often if s.touched]
+    assert held_starts(often + seldom + no_state, every=2) == [often[k] for k in (1, 3, 6)]   # type: ignore[arg-type]
+    with pytest.raises(ValueError, match='every'):
+        held_starts(often, every=0)    # type: ignore[arg-type]

@@ -218,3 +218,24 @@ def test_the_basin_counts_a_start_bound_only_if_it_keeps_colliding_and_repelled_
     assert '| parallel normals (phi 0) | 0/1 (' in report
     assert basin_outcome({'admissible': True, 'bound_at_end': True}) == 'bound'   # a record from before the rule
     assert basin_outcome({'admissible': True, 'bound_at_end': False}) == 'repelled'
+
+
+def test_the_p6_report_gives_means_and_a_log_rank_test_of_open_loop_against_feedback(tmp_path: Path) -> None:
+    spec = spec_from_mapping({'name': 'p6x', 'description': 'synthetic', 'kind': 'p6', 'periods': 200, 'seeds': 6,
+                              'grid': [{'alpha_max_deg': [90], 'feedback': [False, True]}], 'report': ['p6']})
+    trials = spec.trials(CODE)
+    store = ResultStore(tmp_path / 'p6x')
+    for t in trials:
+        feedback = bool(t.params['feedback'])
+        life = 200 if feedback and t.seed < 4 else 20 + 10 * t.seed     # feedback: 4 of 6 reach the end
+        store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': t.point, 'status': 'ok',
+                     'result': {'lifetime_periods': life, 'censored': life == 200, 'halts': 3 if feedback else 0,
+                                'trouble': '', 'r0_bl': 1.0, 'theta0_deg': 90.0, 'phi0_deg': 5.0,
+                                'final_r_bl': 1.0}})
+    report = write_report(spec, trials, store, CODE).read_text()
+    assert '| open loop 90 deg | 6 | 0 |' in report and '| 45.0 +- 7.6 | 0.0 |' in report
+    assert '| feedback 90 deg | 6 | 4 |' in report and '| 155.0 +- 28.5 | 3.0 |' in report
+    line = next(x for x in report.splitlines() if x.startswith('Log-rank'))
+    assert 'at 90 deg' in line and 'mean lifetime ratio feedback / open loop 3.44' in line
+    p = float(line.split('p = ')[1].split(';')[0])
+    assert p < 0.01, line

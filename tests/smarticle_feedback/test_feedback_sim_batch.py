@@ -55,6 +55,23 @@ def test_the_harvested_c2_start_touches_only_when_the_clocks_drift() -> None:
     assert C2_START[3] == (0.0, 0.0)
 
 
+def test_the_held_c2_start_is_a_shipped_glider_state_that_touches_from_its_first_period() -> None:
+    """The held start places the pair at a recorded state of a collision-held C2 (seeded pick), bound and in
+    contact from period 0, and a trial repeats exactly for its seed."""
+    from smarticle_experiments.p6 import HELD, load_held_starts
+
+    starts = load_held_starts()
+    assert len(starts) >= 40 and all(s.touched and s.state is not None for s in starts)
+    runs = [run_pair_trial(Condition(90.0, False), 3, 3, count_contacts=True, base=HELD) for _ in range(2)]
+    trial = runs[0]
+    assert trial.start in {(s.r_bl, s.theta_deg, s.phi_deg) for s in starts}
+    assert trial.r[0] == pytest.approx(trial.start[0], abs=1e-4)    # placed where the dense trial had it
+    assert trial.contact_periods[:1] == [0] and trial.lifetime_periods >= 3
+    np.testing.assert_array_equal(trial.r, runs[1].r)
+    other = run_pair_trial(Condition(90.0, False), 4, 1, base=HELD)
+    assert other.start != trial.start, 'seeds 3 and 4 draw different shipped starts'
+
+
 def test_seeds_jitter_the_start_slightly() -> None:
     base = c2_start(0)
     for seed in range(1, 6):

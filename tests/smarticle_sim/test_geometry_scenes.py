@@ -85,3 +85,51 @@ def test_random_scene_non_overlapping_and_seeded(gait90: GaitConfig) -> None:
     assert len({r.gait.phase for r in scene.robots}) == 10   # type: ignore[union-attr]
     with pytest.raises(SceneError, match='could not place'):
         random_scene(SMALL, gait90, 30, seed=1, region=0.15, max_tries=300)
+
+
+def test_a_start_taken_from_a_running_trial_restores_every_robots_state() -> None:
+    from smarticle_sim.physics import Physics
+    from smarticle_sim.runner import Runner
+    from smarticle_sim.scenes import RobotState, dense_scene, state_scene
+    from smarticle_sim.settings import SimConfig
+
+    config = SimConfig.from_preset('feedback')
+    gait = GaitConfig.from_degrees(90.0, servo_speed=config.robot.servo_speed)
+    with Runner.with_gaits(config, dense_scene(config.robot, gait, 3, seed=4)) as runner:
+        assert runner.gaits is not None
+        runner.gaits.start(0.0)
+        runner.run(runner.ticks_for(2.3 * gait.period))     # early in a quarter: the arms are moving
+        taken = runner.physics.placements()
+    assert any(abs(v) > 0.1 for p in taken for v in p.state.arm_velocities)    # type: ignore[union-attr]
+    mean = tuple(np.mean([(p.x, p.y) for p in taken], axis=0))
+    with Physics(config, state_scene(taken, [gait] * 3, centre=mean)) as physics:
+        again = physics.placements()
+    for a, b in zip(taken, again, strict=True):
+        assert a.state is not None and b.state is not None
+        # PyBullet renormalises the quaternion it is given: equal to rounding (1e-12), not to the bit
+        assert (a.alpha1, a.alpha2, a.heading) == pytest.approx((b.alpha1, b.alpha2, b.heading), abs=1e-12)
+        assert a.state.values() == pytest.approx(b.state.values(), abs=1e-12)
+        assert (a.x, a.y) == pytest.approx((b.x, b.y), abs=1e-15)   # moved by the mean and back
+    assert RobotState.from_values(taken[0].state.values()) == taken[0].state    # type: ignore[union-attr]
+    with pytest.raises(SceneError, match='13 finite numbers'):
+        RobotState.from_values([0.0] * 12)
+    with pytest.raises(SceneError, match='has no state'):
+        state_scene([RobotPlacement(0.0, 0.0, 0.0)], [gait])
+
+
+def test_a_restored_scene_may_overlap_by_its_tolerance_and_no_more() -> None:
+    from smarticle_sim.scenes import RobotState, state_scene
+    from smarticle_sim.settings import SimConfig
+
+    spec = SimConfig.from_preset('feedback').robot
+    rest = RobotState(spec.body_height / 2.0, (0.0, 0.0, 0.0, 1.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0))
+    # two robots side by side along their bodies' depth, their bodies overlapping by `depth` m
+    def pair(depth: float) -> list[RobotPlacement]:
+        dy = spec.body_depth - depth
+        return [RobotPlacement(0.0, 0.0, math.pi / 2, state=rest), RobotPlacement(0.0, dy, math.pi / 2, state=rest)]
+
+    state_scene(pair(0.001), [None, None]).validate(spec, 1.0)        # 1 mm: a contact of the old trial
+    with pytest.raises(SceneError, match='overlap'):
+        state_scene(pair(0.004), [None, None]).validate(spec, 1.0)     # 4 mm: more than the 2 mm default
+    with pytest.raises(SceneError, match='overlap'):
+        state_scene(pair(0.001), [None, None], overlap_tolerance=0.0).validate(spec, 1.0)
