@@ -549,41 +549,58 @@ def logrank_p(a: Sequence[Mapping[str, Any]], b: Sequence[Mapping[str, Any]]) ->
 
 
 def section_p6(ctx: Context) -> list[str]:
-    """Fig. 5d / P6: C2 lifetimes open loop against feedback (Kaplan-Meier, censored at the trial's end)."""
-    groups: dict[tuple[float, bool], list[dict[str, Any]]] = defaultdict(list)
+    """Fig. 5d / P6: C2 lifetimes open loop against feedback (Kaplan-Meier, censored at the trial's end).
+
+    A grid over more than amplitude and feedback (e.g. ``noise.clock_rate_sd``) gives one row per setting and
+    condition; open loop and feedback are compared (log-rank) within a setting.
+    """
+    Key = tuple[tuple[tuple[str, Any], ...], float, bool]
+    groups: dict[Key, list[dict[str, Any]]] = defaultdict(list)
     for t, r in ctx.ok():
-        groups[(float(t.params['alpha_max_deg']), bool(t.params['feedback']))].append(r)
-    lines = ['| condition | trials | reached the end | KM median lifetime (periods) [95 %] | mean lifetime +- SE | '
-             'mean halts |', '| --- | ---: | ---: | --- | ---: | ---: |']
+        setting = tuple(sorted((k, v) for k, v in t.point.items() if k not in ('alpha_max_deg', 'feedback')))
+        groups[(setting, float(t.params['alpha_max_deg']), bool(t.params['feedback']))].append(r)
+    keys = sorted({k for setting, _, _ in groups for k, _ in setting})
+    lines = ['| ' + ''.join(f'{k} | ' for k in keys) + 'condition | trials | reached the end | KM median lifetime '
+             '(periods) [95 %] | mean lifetime +- SE | mean halts |',
+             '| ' + '---: | ' * len(keys) + '--- | ---: | ---: | --- | ---: | ---: |']
     fig = figure(11, 4.5)
     ax1, ax2 = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
-    medians: dict[tuple[float, bool], Estimate] = {}
-    for x, (cond, rows) in enumerate(sorted(groups.items())):
-        label = f'{"feedback" if cond[1] else "open loop"} {cond[0]:g} deg'
+    medians: dict[Key, Estimate] = {}
+    order = sorted(groups.items(), key=lambda kv: (str(kv[0][0]), kv[0][1], kv[0][2]))
+    labels = []
+    for x, (cond, rows) in enumerate(order):
+        setting, alpha, feedback = cond
+        values_of = dict(setting)
+        label = f'{"feedback" if feedback else "open loop"} {alpha:g} deg'
+        short = f'{"fb" if feedback else "ol"} {alpha:g}' + ''.join(f' {v:g}' if isinstance(v, float) else f' {v}'
+                                                                     for _, v in setting)
+        labels.append(short)
         km = kaplan_meier([r['lifetime_periods'] for r in rows], [bool(r['censored']) for r in rows])
         medians[cond] = km.median
         life = np.array([r['lifetime_periods'] for r in rows], dtype=float)
         se = life.std(ddof=1) / np.sqrt(life.size) if life.size > 1 else float('nan')
-        lines.append(f'| {label} | {len(rows)} | {km.censored} | {km.median.text(".0f")} | {life.mean():.1f} +- '
+        lines.append('| ' + ''.join(f'{values_of.get(k, "")} | ' for k in keys)
+                     + f'{label} | {len(rows)} | {km.censored} | {km.median.text(".0f")} | {life.mean():.1f} +- '
                      f'{se:.1f} | {np.mean([r["halts"] for r in rows]):.1f} |')
         ax1.scatter(x + np.linspace(-0.15, 0.15, life.size), life, s=12)
-        ax2.step(np.r_[0, km.times], np.r_[1, km.survival], where='post', label=label)
-    ax1.set_xticks(range(len(groups)), [f'{"fb" if c[1] else "ol"} {c[0]:g}' for c in sorted(groups)], fontsize=8)
+        ax2.step(np.r_[0, km.times], np.r_[1, km.survival], where='post', label=short if setting else label)
+    ax1.set_xticks(range(len(order)), labels, fontsize=7, rotation=20)
     ax1.set_ylabel('C2 lifetime (periods)')
     ax2.set_xlabel('lifetime (periods)')
     ax2.set_ylabel('survival (Kaplan-Meier)')
     legend(ax2, 7)
     ctx.save(fig, 'p6_lifetimes')
-    for (alpha, feedback), rows in sorted(groups.items()):
-        plain = groups.get((alpha, False))
+    for (setting, alpha, feedback), rows in order:
+        plain = groups.get((setting, alpha, False))
         if feedback and plain:
             stat, p = logrank_p(plain, rows)
             ratio = (np.mean([r['lifetime_periods'] for r in rows])
                      / max(float(np.mean([r['lifetime_periods'] for r in plain])), 1e-9))
-            lines.append(f'\nLog-rank (censored lifetimes), open loop against feedback at {alpha:g} deg: statistic '
-                         f'{stat:.3f}, p = {p:.3g}; mean lifetime ratio feedback / open loop {ratio:.2f}.')
-    fb = [m for (_, f), m in medians.items() if f]
-    ol = [m for (_, f), m in medians.items() if not f]
+            where = ''.join(f', {k} {v}' for k, v in setting)
+            lines.append(f'\nLog-rank (censored lifetimes), open loop against feedback at {alpha:g} deg{where}: '
+                         f'statistic {stat:.3f}, p = {p:.3g}; mean lifetime ratio feedback / open loop {ratio:.2f}.')
+    fb = [m for (_, _, f), m in medians.items() if f]
+    ol = [m for (_, _, f), m in medians.items() if not f]
     if fb and ol:
         best_ol = max(ol, key=lambda m: m.high)
         longer = all(m.low > best_ol.high for m in fb)
