@@ -593,10 +593,14 @@ def section_p6(ctx: Context) -> list[str]:
     for (setting, alpha, feedback), rows in order:
         plain = groups.get((setting, alpha, False))
         if feedback and plain:
+            where = ''.join(f', {k} {v}' for k, v in setting)
+            if all(r['censored'] for r in (*plain, *rows)):
+                lines.append(f'\nOpen loop against feedback at {alpha:g} deg{where}: every pair reached the end, no '
+                             'test.')
+                continue
             stat, p = logrank_p(plain, rows)
             ratio = (np.mean([r['lifetime_periods'] for r in rows])
                      / max(float(np.mean([r['lifetime_periods'] for r in plain])), 1e-9))
-            where = ''.join(f', {k} {v}' for k, v in setting)
             lines.append(f'\nLog-rank (censored lifetimes), open loop against feedback at {alpha:g} deg{where}: '
                          f'statistic {stat:.3f}, p = {p:.3g}; mean lifetime ratio feedback / open loop {ratio:.2f}.')
     fb = [m for (_, _, f), m in medians.items() if f]

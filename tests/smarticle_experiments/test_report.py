@@ -239,3 +239,26 @@ def test_the_p6_report_gives_means_and_a_log_rank_test_of_open_loop_against_feed
     assert 'at 90 deg' in line and 'mean lifetime ratio feedback / open loop 3.44' in line
     p = float(line.split('p = ')[1].split(';')[0])
     assert p < 0.01, line
+
+
+def test_the_p6_report_gives_one_row_per_grid_setting_and_compares_within_it(tmp_path: Path) -> None:
+    spec = spec_from_mapping({'name': 'p6y', 'description': 'synthetic', 'kind': 'p6', 'periods': 100, 'seeds': 4,
+                              'noise': {'clock_rate_sd': 0.003},
+                              'grid': [{'alpha_max_deg': [90], 'feedback': [False, True],
+                                        'noise.clock_rate_sd': [0.0, 0.003]}], 'report': ['p6']})
+    trials = spec.trials(CODE)
+    store = ResultStore(tmp_path / 'p6y')
+    for t in trials:
+        quiet = t.point['noise.clock_rate_sd'] == 0.0
+        life = 100 if quiet else 30 + t.seed + (5 if t.params['feedback'] else 0)
+        store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': t.point, 'status': 'ok',
+                     'result': {'lifetime_periods': life, 'censored': life == 100, 'halts': 0, 'trouble': ''}})
+    report = write_report(spec, trials, store, CODE).read_text()
+    assert '| noise.clock_rate_sd | condition | trials |' in report
+    assert '| 0.0 | open loop 90 deg | 4 | 4 |' in report and '| 0.003 | open loop 90 deg | 4 | 0 |' in report
+    assert '| 0.003 | open loop 90 deg | 4 | 0 | 31 [30, ?] | 31.5 +- 0.6 |' in report
+    assert '| 0.003 | feedback 90 deg | 4 | 0 | 36 [35, ?] | 36.5 +- 0.6 |' in report
+    assert 'at 90 deg, noise.clock_rate_sd 0.0: every pair reached the end, no test.' in report
+    logranks = [x for x in report.splitlines() if x.startswith('Log-rank')]
+    assert len(logranks) == 1 and 'noise.clock_rate_sd 0.003: ' in logranks[0]
+    assert 'ratio feedback / open loop 1.16' in logranks[0]
