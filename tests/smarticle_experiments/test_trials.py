@@ -24,6 +24,7 @@ def params(kind: str, **changes: object) -> dict:
                                                  'out_of_reach_at_end', 'gliders', 'trouble'}),
     ('single', {'periods': 2.0}, {'drift_um_per_cycle', 'trouble', 'cycles'}),
     ('p6', {'periods': 2.0, 'feedback': True}, {'lifetime_periods', 'censored', 'halts', 'trouble'}),
+    ('p6', {'periods': 2.0, 'start': 'held'}, {'lifetime_periods', 'censored', 'r0_bl', 'trouble'}),
     ('accuracy', {'periods': 2.0, 'single_periods': 2.0}, {'wall_per_sim_s', 'r_mean_bl', 'drift_um_per_cycle',
                                                           'xy1_bl', 'trouble'}),
 ])
