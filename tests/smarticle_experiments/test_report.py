@@ -32,6 +32,16 @@ def dense_result(seed: int) -> dict[str, Any]:
             'trajectory_dt': 1.6}
 
 
+def report_of(spec: Any, folder: Path, result: Any) -> str:
+    """The report of ``spec`` with every trial stored as ok with ``result(trial)``."""
+    trials = spec.trials(CODE)
+    store = ResultStore(folder)
+    for t in trials:
+        store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': dict(t.point), 'status': 'ok',
+                     'result': result(t)})
+    return write_report(spec, trials, store, CODE).read_text()
+
+
 def test_p1_report_puts_the_paper_inside_the_sims_intervals_and_lists_what_it_left_out(tmp_path: Path) -> None:
     spec = spec_from_mapping({'name': 'p1', 'description': 'synthetic', 'kind': 'dense', 'seeds': 153,
                               'report': ['p1', 'trajectories', 'configurations', 'lifetimes'],
@@ -81,20 +91,19 @@ def test_trials_in_sim_trouble_are_counted_and_listed_not_used(tmp_path: Path) -
 def test_drift_is_reported_per_amplitude_and_per_other_grid_setting(tmp_path: Path) -> None:
     spec = spec_from_mapping({'name': 'amp', 'kind': 'single', 'seeds': 3, 'report': ['drift'],
                               'grid': {'alpha_max_deg': [10, 90], 'physics.tilt_inertia_scale': [1.0, 100.0]}})
-    trials = spec.trials(CODE)
-    store = ResultStore(tmp_path / 'amp')
-    for t in trials:
+
+    def result(t: Any) -> dict[str, Any]:
         scale = t.point['physics.tilt_inertia_scale']
         drift = (115.0 if scale == 1.0 else 18.0) if t.point['alpha_max_deg'] == 10 else 114.0
-        store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': dict(t.point), 'status': 'ok',
-                     'result': {'drift_um_per_cycle': drift + t.seed, 'trouble': ''}})
-    report = write_report(spec, trials, store, CODE).read_text()
+        return {'drift_um_per_cycle': drift + t.seed, 'trouble': ''}
+
+    report = report_of(spec, tmp_path / 'amp', result)
     assert '| physics.tilt_inertia_scale | alpha_max (deg) | robots | drift (um / cycle) [95 %] |' in report
     assert '| 1.0 | 10 | 3 | 116.0 [' in report and '| 100.0 | 10 | 3 | 19.0 [' in report
     assert '| 100.0 | 90 | 3 | 115.0 [' in report
     assert 'P7 drift per cycle at 90 deg (um) (physics.tilt_inertia_scale 1.0)' in report
     assert 'P7 drift per cycle at 90 deg (um) (physics.tilt_inertia_scale 100.0)' in report
-    assert (store.folder / 'report-amp' / 'drift.png').stat().st_size > 0
+    assert (tmp_path / 'amp' / 'report-amp' / 'drift.png').stat().st_size > 0
 
 
 def test_every_section_a_spec_may_name_is_drawn() -> None:
@@ -223,16 +232,14 @@ def test_the_basin_counts_a_start_bound_only_if_it_keeps_colliding_and_repelled_
 def test_the_p6_report_gives_means_and_a_log_rank_test_of_open_loop_against_feedback(tmp_path: Path) -> None:
     spec = spec_from_mapping({'name': 'p6x', 'description': 'synthetic', 'kind': 'p6', 'periods': 200, 'seeds': 6,
                               'grid': [{'alpha_max_deg': [90], 'feedback': [False, True]}], 'report': ['p6']})
-    trials = spec.trials(CODE)
-    store = ResultStore(tmp_path / 'p6x')
-    for t in trials:
+
+    def result(t: Any) -> dict[str, Any]:
         feedback = bool(t.params['feedback'])
         life = 200 if feedback and t.seed < 4 else 20 + 10 * t.seed     # feedback: 4 of 6 reach the end
-        store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': t.point, 'status': 'ok',
-                     'result': {'lifetime_periods': life, 'censored': life == 200, 'halts': 3 if feedback else 0,
-                                'trouble': '', 'r0_bl': 1.0, 'theta0_deg': 90.0, 'phi0_deg': 5.0,
-                                'final_r_bl': 1.0}})
-    report = write_report(spec, trials, store, CODE).read_text()
+        return {'lifetime_periods': life, 'censored': life == 200, 'halts': 3 if feedback else 0, 'trouble': '',
+                'r0_bl': 1.0, 'theta0_deg': 90.0, 'phi0_deg': 5.0, 'final_r_bl': 1.0}
+
+    report = report_of(spec, tmp_path / 'p6x', result)
     assert '| open loop 90 deg | 6 | 0 |' in report and '| 45.0 +- 7.6 | 0.0 |' in report
     assert '| feedback 90 deg | 6 | 4 |' in report and '| 155.0 +- 28.5 | 3.0 |' in report
     line = next(x for x in report.splitlines() if x.startswith('Log-rank'))
@@ -246,14 +253,11 @@ def test_the_p6_report_gives_one_row_per_grid_setting_and_compares_within_it(tmp
                               'noise': {'clock_rate_sd': 0.003},
                               'grid': [{'alpha_max_deg': [90], 'feedback': [False, True],
                                         'noise.clock_rate_sd': [0.0, 0.003]}], 'report': ['p6']})
-    trials = spec.trials(CODE)
-    store = ResultStore(tmp_path / 'p6y')
-    for t in trials:
-        quiet = t.point['noise.clock_rate_sd'] == 0.0
-        life = 100 if quiet else 30 + t.seed + (5 if t.params['feedback'] else 0)
-        store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': t.point, 'status': 'ok',
-                     'result': {'lifetime_periods': life, 'censored': life == 100, 'halts': 0, 'trouble': ''}})
-    report = write_report(spec, trials, store, CODE).read_text()
+    # no clock noise: every pair reaches the end; with it, feedback lives 5 periods longer in every seed
+    lives = {t.key: 100 if t.point['noise.clock_rate_sd'] == 0.0 else 30 + t.seed + 5 * bool(t.params['feedback'])
+             for t in spec.trials(CODE)}
+    report = report_of(spec, tmp_path / 'p6y', lambda t: {'lifetime_periods': lives[t.key], 'halts': 0, 'trouble': '',
+                                                          'censored': lives[t.key] == 100})
     assert '| noise.clock_rate_sd | condition | trials |' in report
     assert '| 0.0 | open loop 90 deg | 4 | 4 |' in report and '| 0.003 | open loop 90 deg | 4 | 0 |' in report
     assert '| 0.003 | open loop 90 deg | 4 | 0 | 31 [30, ?] | 31.5 +- 0.6 |' in report
