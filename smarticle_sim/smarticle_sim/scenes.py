@@ -201,6 +201,8 @@ def state_scene(placements: Sequence[RobotPlacement], gaits: Sequence[GaitConfig
     phase). Footprints may overlap by ``overlap_tolerance`` (m, default 2 mm): the contacts of the old trial.
     Raises SceneError if a placement has no ``state`` or the robots overlap by more.
     """
+    if not (math.isfinite(overlap_tolerance) and 0.0 <= overlap_tolerance <= 0.01):
+        raise SceneError(f'state_scene: overlap_tolerance must be in [0, 0.01] m, got {overlap_tolerance!r}')
     if len(placements) != len(gaits):
         raise SceneError(f'state_scene: {len(placements)} placements but {len(gaits)} gaits')
     if not placements:

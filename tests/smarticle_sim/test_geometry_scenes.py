@@ -133,3 +133,6 @@ def test_a_restored_scene_may_overlap_by_its_tolerance_and_no_more() -> None:
         state_scene(pair(0.004), [None, None]).validate(spec, 1.0)     # 4 mm: more than the 2 mm default
     with pytest.raises(SceneError, match='overlap'):
         state_scene(pair(0.001), [None, None], overlap_tolerance=0.0).validate(spec, 1.0)
+    for bad in (-0.001, 0.05, math.nan):
+        with pytest.raises(SceneError, match='overlap_tolerance'):
+            state_scene(pair(0.001), [None, None], overlap_tolerance=bad)
