@@ -22,7 +22,7 @@ from smarticle_common.gait import GaitConfig
 from smarticle_feedback.collisions import (CollisionRecord, find_events, format_events, format_signature,
                                            plot_events, signature, write_events_csv)
 
-from .p6 import C2_START, HELD, START_NAMES, c2_scene, held_scene, p6_noise, start_base
+from .p6 import C2_START, START_NAMES, p6_noise, start_base, start_scene
 
 
 def record_pair(seed: int = 0, periods: float = 40.0, alpha_max_deg: float = 90.0, preset: str = 'feedback',
@@ -42,14 +42,7 @@ def record_pair(seed: int = 0, periods: float = 40.0, alpha_max_deg: float = 90.
     if noise is not None:
         config = config.with_noise(noise)   # the pair scene carries the trial seed its draws take
     gait = GaitConfig.from_degrees(alpha_max_deg, servo_speed=config.robot.servo_speed)
-    if base == HELD:
-        scene, _ = held_scene(config, gait, seed)
-        phases = (0.0, 0.0)
-    elif isinstance(base, str):
-        raise ValueError(f'base must be pair coordinates or {HELD!r}, got {base!r}')
-    else:
-        scene, _ = c2_scene(config, gait, seed, base)
-        phases = base[3]
+    scene, _, phases = start_scene(config, gait, seed, base)
     times: list[float] = []
     fsr: list[np.ndarray] = []
     links: list[np.ndarray] = []

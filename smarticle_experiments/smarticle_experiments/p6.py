@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import functools
 import math
 import sys
 import time
@@ -75,21 +76,35 @@ def held_starts_path() -> Path:
         return here
 
 
-_HELD_CACHE: dict[str, list[Any]] = {}
-
-
-def load_held_starts(path: str | Path | None = None) -> list[Any]:
+def load_held_starts(path: str | Path | None = None) -> tuple[Any, ...]:
     """The held-C2 starts (``C2Sample`` with state) of ``path`` (default: the shipped file), read once per
     process. ValueError if the file has no start with a state."""
+    return _read_held_starts(str(path or held_starts_path()))
+
+
+@functools.cache
+def _read_held_starts(path: str) -> tuple[Any, ...]:
     from smarticle_experiments.c2_harvest import read_csv
 
-    key = str(path or held_starts_path())
-    if key not in _HELD_CACHE:
-        starts = [s for s in read_csv(key) if s.state is not None]
-        if not starts:
-            raise ValueError(f'{key}: no start with a recorded state')
-        _HELD_CACHE[key] = starts
-    return _HELD_CACHE[key]
+    starts = tuple(s for s in read_csv(path) if s.state is not None)
+    if not starts:
+        raise ValueError(f'{path}: no start with a recorded state')
+    return starts
+
+
+def start_scene(config: Any, gait: GaitConfig, seed: int,
+                base: tuple[float, float, float, tuple[float, float]] | str = C2_START,
+                ) -> tuple[Any, tuple[float, float, float], tuple[float, float]]:
+    """The pair scene of the seed's start, that start (r BL, theta deg, phi deg) and the two gait phases:
+    ``base`` is a start's pair coordinates and phases (``STARTS``, ``c2_scene``) or ``HELD`` (``held_scene``,
+    both in phase). ValueError for any other string."""
+    if isinstance(base, str):
+        if base != HELD:
+            raise ValueError(f'base must be pair coordinates or {HELD!r}, got {base!r}')
+        scene, start = held_scene(config, gait, seed)
+        return scene, start, (0.0, 0.0)
+    scene, start = c2_scene(config, gait, seed, base)
+    return scene, start, base[3]
 
 
 def held_scene(config: Any, gait: GaitConfig, seed: int, path: str | Path | None = None
@@ -234,14 +249,7 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
     if noise is not None:
         config = config.with_noise(noise)   # the pair scene carries the trial seed its draws take
     gait = GaitConfig.from_degrees(condition.alpha_max_deg, servo_speed=config.robot.servo_speed)
-    if isinstance(base, str):
-        if base != HELD:
-            raise ValueError(f'base must be pair coordinates or {HELD!r}, got {base!r}')
-        scene, (r, theta, phi) = held_scene(config, gait, seed)
-        phases = (0.0, 0.0)
-    else:
-        scene, (r, theta, phi) = c2_scene(config, gait, seed, base)
-        phases = base[3]
+    scene, (r, theta, phi), phases = start_scene(config, gait, seed, base)
     feedback_controllers: list[FeedbackController] = []
 
     # every manifold point between the two robots counts, as the contact tables of docs/feedback.md were made
@@ -368,16 +376,10 @@ def kaplan_meier(lifetimes: Sequence[float], censored: Sequence[bool]) -> tuple[
 
 
 def logrank_test(a: Sequence[PairTrial], b: Sequence[PairTrial]) -> tuple[float, float]:
-    """Log-rank test of two groups' lifetimes with censoring (scipy.stats.logrank): (statistic, p)."""
-    from scipy.stats import CensoredData, logrank
+    """Log-rank test of two groups' lifetimes with censoring (``stats.logrank``): (statistic, p)."""
+    from smarticle_experiments.stats import logrank
 
-    def data(group: Sequence[PairTrial]) -> CensoredData:
-        life = np.array([t.lifetime_periods for t in group], dtype=float)
-        cens = np.array([t.censored for t in group], dtype=bool)
-        return CensoredData(uncensored=life[~cens], right=life[cens])
-
-    res = logrank(data(a), data(b))
-    return float(res.statistic), float(res.pvalue)
+    return logrank(*(([t.lifetime_periods for t in g], [t.censored for t in g]) for g in (a, b)))
 
 
 def plot_survival(trials: Sequence[PairTrial], path: Path, periods: float) -> Path:

@@ -30,7 +30,7 @@ import numpy as np
 from smarticle_sim.settings import BULLET_SOLVER_RESIDUAL_THRESHOLD
 
 from .spec import ExperimentSpec, Trial, seed_runs
-from .stats import Estimate, bootstrap_mean, kaplan_meier, wilson
+from .stats import Estimate, bootstrap_mean, kaplan_meier, logrank, wilson
 from .store import ResultStore, write_atomic
 from .trials import config_of, ensemble_msd, msd_beta
 
@@ -534,20 +534,6 @@ def section_step_convergence(ctx: Context) -> list[str]:
             '![step convergence](step_convergence.png)']
 
 
-def logrank_p(a: Sequence[Mapping[str, Any]], b: Sequence[Mapping[str, Any]]) -> tuple[float, float]:
-    """Log-rank test (scipy.stats.logrank) of two groups of trial results with ``lifetime_periods`` and
-    ``censored``: (statistic, p)."""
-    from scipy.stats import CensoredData, logrank
-
-    def data(rows: Sequence[Mapping[str, Any]]) -> CensoredData:
-        life = np.array([r['lifetime_periods'] for r in rows], dtype=float)
-        cens = np.array([bool(r['censored']) for r in rows], dtype=bool)
-        return CensoredData(uncensored=life[~cens], right=life[cens])
-
-    res = logrank(data(a), data(b))
-    return float(res.statistic), float(res.pvalue)
-
-
 def section_p6(ctx: Context) -> list[str]:
     """Fig. 5d / P6: C2 lifetimes open loop against feedback (Kaplan-Meier, censored at the trial's end).
 
@@ -598,7 +584,8 @@ def section_p6(ctx: Context) -> list[str]:
                 lines.append(f'\nOpen loop against feedback at {alpha:g} deg{where}: every pair reached the end, no '
                              'test.')
                 continue
-            stat, p = logrank_p(plain, rows)
+            stat, p = logrank(*(([r['lifetime_periods'] for r in g], [bool(r['censored']) for r in g])
+                                for g in (plain, rows)))
             ratio = (np.mean([r['lifetime_periods'] for r in rows])
                      / max(float(np.mean([r['lifetime_periods'] for r in plain])), 1e-9))
             lines.append(f'\nLog-rank (censored lifetimes), open loop against feedback at {alpha:g} deg{where}: '

@@ -130,3 +130,19 @@ def kaplan_meier(lifetimes: Sequence[float], censored: Sequence[bool]) -> Surviv
     median = Estimate(_first_below(times, surv), _first_below(times, low), _first_below(times, high), n,
                       'Kaplan-Meier')
     return Survival(times, surv, low, high, median, n, n_cens)
+
+
+def logrank(a: tuple[Sequence[float], Sequence[bool]], b: tuple[Sequence[float], Sequence[bool]]
+            ) -> tuple[float, float]:
+    """Log-rank test (``scipy.stats.logrank``) of two groups of right-censored lifetimes, each given as
+    (lifetimes, censored): (statistic, p)."""
+    from scipy.stats import CensoredData
+    from scipy.stats import logrank as scipy_logrank
+
+    def data(group: tuple[Sequence[float], Sequence[bool]]) -> CensoredData:
+        life = np.asarray(group[0], dtype=float)
+        cens = np.asarray(group[1], dtype=bool)
+        return CensoredData(uncensored=life[~cens], right=life[cens])
+
+    res = scipy_logrank(data(a), data(b))
+    return float(res.statistic), float(res.pvalue)
