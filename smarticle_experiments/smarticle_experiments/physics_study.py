@@ -347,6 +347,8 @@ VARIANTS['proposed'] = MODELS['proposed']
 for _inv in (480, 960, 1920):   # the shipped defaults against the time step
     VARIANTS[f'shipped dt 1/{_inv}'] = {'time_step': 1.0 / _inv}
 VARIANTS['proposed soft'] = MODELS['proposed soft']
+for _torque in (0.05, 0.18, 10.0):   # the servo's torque limit at the default: shipped, a micro servo, rigid
+    VARIANTS[f'shipped torque {_torque}'] = {'servo_torque': _torque}
 for _it in (5, 10, 20, 50):     # solver iterations at the candidate step, robots kept flat
     VARIANTS[f'flat dt 1/480 it {_it}'] = {**MODELS['candidate'], 'tilt_inertia_scale': 100.0,
                                            'time_step': 1.0 / 480, 'solver_iterations': _it}
