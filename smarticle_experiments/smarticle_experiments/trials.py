@@ -243,12 +243,17 @@ def single_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
 
 
 def p6_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
-    """P6: a C2 pair of the feedback robot, open loop or with impact-halt feedback (the feedback package's trial)."""
+    """P6: a C2 pair of the feedback robot, open loop or with impact-halt feedback (the feedback package's trial).
+
+    ``physics`` / ``robot`` replace fields of the feedback preset's PhysicsConfig / RobotSpec (a spec's
+    ``physics:`` / ``robot:`` or grid keys ``physics.X`` / ``robot.X``).
+    """
     from smarticle_experiments.p6 import Condition, run_pair_trial, start_base
 
     noise = replace(NoiseConfig.none(), **noise_mapping(p.get('noise'))) if p.get('noise') else None
     trial = run_pair_trial(Condition(float(p['alpha_max_deg']), bool(p['feedback'])), seed, float(p['periods']),
-                           base=start_base(str(p['start'])), noise=noise)
+                           base=start_base(str(p['start'])), noise=noise,
+                           robot_changes=dict(p.get('robot') or {}), physics_changes=dict(p.get('physics') or {}))
     return {'lifetime_periods': int(trial.lifetime_periods), 'censored': bool(trial.censored),
             'halts': len(trial.halts), 'trouble': trial.trouble,
             'r0_bl': trial.start[0], 'theta0_deg': trial.start[1], 'phi0_deg': trial.start[2],
@@ -315,7 +320,8 @@ KINDS: dict[str, TrialKind] = {
                       'two robots from pair coordinates (P4 basin scan, P5 alpha_max sweep)'),
     'single': TrialKind(single_trial, {**_COMMON, 'periods': 20.0, 'sample_every': 1},
                         'one robot alone, drift per cycle (P7)'),
-    'p6': TrialKind(p6_trial, {'periods': 100.0, 'alpha_max_deg': 90.0, 'feedback': False, 'start': 'harvested'},
+    'p6': TrialKind(p6_trial, {'periods': 100.0, 'alpha_max_deg': 90.0, 'feedback': False, 'start': 'harvested',
+                               'physics': {}, 'robot': {}},
                     'C2 pair of the feedback robot, open loop or feedback (P6; smarticle_experiments.p6)'),
     'accuracy': TrialKind(accuracy_trial, {**_COMMON, 'periods': 20.0, 'single_periods': 10.0, 'rate_hz': 240.0,
                                            'control_tick': 1.0 / 60.0, 'solver_iterations': 50, 'r_bl': 1.4,

@@ -104,3 +104,19 @@ def test_a_pair_trials_noise_follows_its_seed() -> None:
     one, other = KINDS['pair'].function(p, 1), KINDS['pair'].function(p, 2)
     assert one['trajectory_bl'][0] == other['trajectory_bl'][0]       # the same start
     assert one['trajectory_bl'] != other['trajectory_bl']             # different clocks
+
+
+def test_a_p6_trial_takes_the_specs_robot_and_physics_changes() -> None:
+    """A ``p6`` spec may change the feedback robot (``robot.servo_torque``) or its physics: they reach the pair."""
+    from smarticle_experiments.spec import spec_from_mapping
+
+    spec = spec_from_mapping({'name': 'p6z', 'description': 'synthetic', 'kind': 'p6', 'periods': 3, 'seeds': 1,
+                              'grid': [{'feedback': [False], 'robot.servo_torque': [0.3, 0.9]}], 'report': ['p6']})
+    assert len(spec.points()) == 2
+    base = params('p6', periods=3.0, start='held')
+    plain = KINDS['p6'].function(base, 1)
+    heavy = KINDS['p6'].function({**base, 'robot': {'arm_mass': 0.03}}, 1)
+    again = KINDS['p6'].function({**base, 'robot': {'arm_mass': 0.03}}, 1)
+    finer = KINDS['p6'].function({**base, 'physics': {'time_step': 1.0 / 1920.0}}, 1)
+    assert heavy == again
+    assert heavy['final_r_bl'] != plain['final_r_bl'] and finer['final_r_bl'] != plain['final_r_bl']
