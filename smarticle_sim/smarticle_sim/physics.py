@@ -153,10 +153,11 @@ class Physics:
             for link in ARM_JOINTS:
                 c.changeDynamics(body, link, lateralFriction=arm_friction,
                                  rollingFriction=0.0, spinningFriction=0.0, jointDamping=0.0, **link_contact)
-            if ph.tilt_inertia_scale != 1.0:
+            if ph.tilt_inertia_scale != 1.0 or ph.yaw_inertia_scale != 1.0:
                 ixx, iyy, izz = c.getDynamicsInfo(body, -1)[2]
                 c.changeDynamics(body, -1, localInertiaDiagonal=[ixx * ph.tilt_inertia_scale,
-                                                                 iyy * ph.tilt_inertia_scale, izz])
+                                                                 iyy * ph.tilt_inertia_scale,
+                                                                 izz * ph.yaw_inertia_scale])
             if ph.ccd_swept_sphere_radius > 0.0:
                 for link in (-1, *ARM_JOINTS):
                     c.changeDynamics(body, link, ccdSweptSphereRadius=ph.ccd_swept_sphere_radius)

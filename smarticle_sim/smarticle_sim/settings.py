@@ -125,6 +125,12 @@ class PhysicsConfig:
     #: docs/sim_calibration.md, "The robots' own roll and pitch inertia"), so nothing departs from the robot
     #: here any more.
     tilt_inertia_scale: float = 1.0
+    #: Factor on the body's yaw inertia (about the plate normal; mass and contacts unchanged). 1: a uniform box
+    #: of the body's mass, the default. The authors' published Chrono code keeps the inertia of a box of
+    #: density 100 kg/m^3 after setting the body's mass to 24.8 g, a yaw inertia 0.129 of the uniform body's;
+    #: measured on P1 as a diagnostic of whether their P1 rests on it (docs/sim_calibration.md, "The
+    #: authors' light body"), not taken: a real body with a servo at each end is no lighter in yaw than uniform.
+    yaw_inertia_scale: float = 1.0
     #: The arms' ends in plan view. 'square': the authors' box arms (5.0 x 0.3 x 2.3 cm). 'round': the same
     #: box with both vertical end edges rounded to the arm's half thickness (a stadium in plan view: a box
     #: of length L - t between two vertical cylinders of diameter t, same length, height, mass and
@@ -172,6 +178,7 @@ class PhysicsConfig:
                 require_non_negative(self, name, error=ConfigError)
         require_non_negative(self, 'ccd_swept_sphere_radius', error=ConfigError)
         require_positive(self, 'tilt_inertia_scale', error=ConfigError)
+        require_positive(self, 'yaw_inertia_scale', error=ConfigError)
         if self.arm_ends not in ARM_ENDS:
             raise ConfigError(f'PhysicsConfig.arm_ends must be one of {", ".join(ARM_ENDS)}, got {self.arm_ends!r}')
         if self.restitution_body_plate is not None and self.restitution_body_plate > 1.0:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import warnings
 
+import numpy as np
 import pytest
 
 from smarticle_common.gait import GaitConfig
@@ -28,7 +29,7 @@ def test_defaults_are_the_converged_model_of_the_calibration() -> None:
     assert ph.restitution == 0.80 and ph.contact_erp == 0.1 and ph.restitution_body_plate == 0.0
     assert ph.restitution_velocity_threshold == 0.01
     assert ph.friction_arm_arm is None and ph.friction_robot_robot == ph.friction_body_plate == 0.3
-    assert ph.ccd_swept_sphere_radius == 0.0 and ph.tilt_inertia_scale == 1.0
+    assert ph.ccd_swept_sphere_radius == 0.0 and ph.tilt_inertia_scale == 1.0 == ph.yaw_inertia_scale
     old = PhysicsConfig(servo_bandwidth=None)
     assert old.servo_gain() == old.position_gain          # the per-step gain of the old servo loop
 
@@ -40,7 +41,7 @@ def test_servo_bandwidth_fixes_the_approach_whatever_the_step() -> None:
     assert PhysicsConfig(servo_bandwidth=1e6).servo_gain() == 1.0   # capped: arrive within one step
 
 
-@pytest.mark.parametrize('field', ['servo_bandwidth', 'tilt_inertia_scale'])
+@pytest.mark.parametrize('field', ['servo_bandwidth', 'tilt_inertia_scale', 'yaw_inertia_scale'])
 def test_non_positive_knobs_refused(field: str) -> None:
     with pytest.raises(ConfigError, match=field):
         PhysicsConfig(**{field: 0.0})
@@ -159,3 +160,21 @@ def test_solver_residual_threshold_reaches_bullet(config: SimConfig, gait90: Gai
     for bad in (0.0, -1e-5):
         with pytest.raises(ConfigError, match='solver_residual_threshold'):
             PhysicsConfig(solver_residual_threshold=bad)
+
+
+def test_bullet_gets_the_yaw_inertia_and_only_it(config: SimConfig) -> None:
+    """``yaw_inertia_scale`` scales the body's inertia about the plate normal; roll, pitch and mass stay."""
+    with Runner.with_gaits(config, lone_robot()) as run:
+        world = run.physics
+        mass, _, inertia = world.client.getDynamicsInfo(world.body_ids[0], -1)[:3]
+    with Runner.with_gaits(config.with_physics(yaw_inertia_scale=0.129), lone_robot()) as run:
+        world = run.physics
+        light_mass, _, light = world.client.getDynamicsInfo(world.body_ids[0], -1)[:3]
+        run.run(60)
+        moved = world.poses()[0].copy()
+    with Runner.with_gaits(config, lone_robot()) as run:
+        run.run(60)
+        assert not np.array_equal(run.physics.poses()[0], moved)   # the light body turns differently
+    assert light_mass == mass
+    assert light[:2] == pytest.approx(inertia[:2], rel=1e-6)
+    assert light[2] == pytest.approx(0.129 * inertia[2], rel=1e-6)
