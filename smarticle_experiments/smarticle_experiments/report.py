@@ -150,7 +150,40 @@ def section_p1(ctx: Context) -> list[str]:
     return [f'Positive trial: a glider (glider analysis, K = {ctx.spec.base.get("min_periods")} periods, '
             f'bound = r under {ctx.spec.base.get("r_bind_bl")} BL in any frame of a period) bound for >= {limit} '
             f'periods. Isolated: in >= 90 % of its periods no third robot\'s centre within {iso_w:g} W of either '
-            'robot.', '', '![P1](p1_longest.png)', '', *end_groups_table(pairs, iso_w)]
+            'robot.', '', '![P1](p1_longest.png)', '', *long_gliders_table(pairs, limit),
+            *end_groups_table(pairs, iso_w)]
+
+
+#: A long glider "travels" if its net displacement is at least this many W per 100 periods (the paper's gliders:
+#: 2.9 W in >= 100 periods; P5's free pair at 90 deg about 3-4 W per 100 periods).
+TRAVELLING_W_PER_100 = 2.0
+
+
+def long_gliders_table(pairs: Sequence[tuple[Trial, dict[str, Any]]], limit: int) -> list[str]:
+    """What the gliders bound >= ``limit`` periods are: by class and by isolation, their mean r and their net
+    travel per 100 periods (median and quartiles), and how many travel >= ``TRAVELLING_W_PER_100``."""
+    long = [g for _, r in pairs for g in r.get('gliders', []) if g['lifetime_periods'] >= limit]
+    if not long:
+        return []
+    groups = [('all', long)] + [(c, [g for g in long if g['class'] == c]) for c in ('C1', 'C2', 'unclassified')]
+    groups += [('isolated', [g for g in long if g.get('isolated')]),
+               ('in a group', [g for g in long if not g.get('isolated')])]
+
+    def quartiles(values: list[float]) -> str:
+        q1, q2, q3 = np.percentile(values, [25, 50, 75])
+        return f'{q2:.2f} [{q1:.2f}, {q3:.2f}]'
+
+    lines = [f'Gliders bound >= {limit} periods, what they are (r: the glider\'s mean centre distance; travel: its net '
+             'displacement per 100 periods of its life; median [quartiles]):', '',
+             f'| gliders | n | r (BL) | travel (W per 100 periods) | travelling >= {TRAVELLING_W_PER_100:g} W per 100 '
+             'periods |', '| --- | ---: | --- | --- | ---: |']
+    for name, gs in groups:
+        if not gs:
+            continue
+        travel = [100.0 * g['distance_w'] / g['lifetime_periods'] for g in gs]
+        fast = sum(t >= TRAVELLING_W_PER_100 for t in travel)
+        lines.append(f'| {name} | {len(gs)} | {quartiles([g["r_bl"] for g in gs])} | {quartiles(travel)} | {fast} |')
+    return [*lines, '']
 
 
 def end_groups(xy: np.ndarray, reach: float) -> tuple[int, ...]:

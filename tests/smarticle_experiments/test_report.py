@@ -67,6 +67,9 @@ def test_p1_report_puts_the_paper_inside_the_sims_intervals_and_lists_what_it_le
     assert 'RuntimeError: boom' in report
     assert 'Groups at the end of the run (robots closer than 2 W, single linkage; 151 trials' in report
     assert '| 2 | 151 | 100% [' in report     # the two synthetic robots end 1 W apart: one group of two
+    # the 97 positive trials' 300-period C1 gliders (2.8 or 3.0 W); the C2 ones live < 100 periods
+    assert '| C1 | 97 | 1.30 [1.30, 1.30] | 0.93 [0.93, 1.00] | 0 |' in report
+    assert '| all | 97 |' in report and '| in a group |' not in report
     assert ('Trouble margins over 151 trials that ran (at their trouble checks): largest body tilt 2.0 deg '
             '(seed 150; median of the trials\' largest 1.2 deg; the limit is 25 deg), deepest contact overlap '
             '3.50 mm (seed 7; trouble is 4 mm at 3 checks in a row)') in report
