@@ -4,16 +4,12 @@ from __future__ import annotations
 
 from typing import Any
 
-from tests.helpers.ros import spin_until
+from tests.helpers.ros import call_service
 
 
 def _call(node: Any, service: str, srv_type: Any, request: Any, timeout: float = 15.0) -> Any:
-    client = node.create_client(srv_type, service)
-    assert client.wait_for_service(timeout_sec=timeout), f'no service {service}'
-    future = client.call_async(request)
-    assert spin_until(node, future.done, timeout), f'{service}: no answer'
-    node.destroy_client(client)
-    return future.result()
+    # getting a parameter, or setting one to a value, may be asked again if the answer is lost
+    return call_service(node, srv_type, service, request, timeout, attempts=3)
 
 
 def set_parameter(node: Any, target: str, name: str, value: Any) -> tuple[bool, str]:

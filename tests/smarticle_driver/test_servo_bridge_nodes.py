@@ -19,7 +19,7 @@ from smarticle_common import topics
 from smarticle_driver.board_calibration import load_fsr_calibration, load_servo_calibration
 from smarticle_driver.emulator import MaestroEmulator, TargetRecord
 from smarticle_common.gait import CORNER_SIGNS
-from tests.helpers.ros import spin_until
+from tests.helpers.ros import call_service, spin_until
 from tests.helpers.fake_board import open_board, running_emulator, wait_until
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -324,20 +324,11 @@ def lifecycle(node: Any, target: str, transition: int | None = None) -> tuple[bo
 
     success = True
     if transition is not None:
-        client = node.create_client(ChangeState, f'{target}/change_state')
-        assert client.wait_for_service(timeout_sec=15.0)
         request = ChangeState.Request()
         request.transition.id = transition
-        future = client.call_async(request)
-        assert spin_until(node, future.done, 15.0)
-        success = future.result().success
-        node.destroy_client(client)
-    client = node.create_client(GetState, f'{target}/get_state')
-    assert client.wait_for_service(timeout_sec=15.0)
-    future = client.call_async(GetState.Request())
-    assert spin_until(node, future.done, 15.0)
-    node.destroy_client(client)
-    return success, future.result().current_state.label
+        success = call_service(node, ChangeState, f'{target}/change_state', request).success
+    state = call_service(node, GetState, f'{target}/get_state', GetState.Request(), attempts=3)   # a query
+    return success, state.current_state.label
 
 
 @pytest.mark.integration
