@@ -118,6 +118,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--iterations', type=solver_setting, nargs='*', default=[],
                         help='P1 also with these solver settings at the default step (batch core), in the same run: '
                              'N (iterations) or N:T (a cap of N iterations with residual threshold T, e.g. 20:1e-5)')
+    parser.add_argument('--tilt', type=float, nargs='*', default=[],
+                        help='P1 also with these roll / pitch inertia scales (tilt_inertia_scale) at the default '
+                             'step and solver (batch core), in the same run')
     parser.add_argument('--out-dir', type=Path, default=None)
     parser.add_argument('--no-progress', action='store_true')
     add_clock_argument(parser)
@@ -187,6 +190,10 @@ def main(argv: list[str] | None = None) -> int:
             if threshold is not None:
                 label += f', residual {threshold:g}'
             fns[label] = lambda cfg=iterated: batch_loop(cfg, scene, p1_periods, clock=clock)
+        for scale in args.tilt:
+            tilted = config.with_physics(tilt_inertia_scale=scale)
+            fns[f'batch core, roll / pitch inertia x{scale:g}'] = (
+                lambda cfg=tilted: batch_loop(cfg, scene, p1_periods, clock=clock))
         best = best_of(fns, repeats, clock, progress, 'P1')
         p1 = []
         for k, (s, w, i) in best.items():
