@@ -497,63 +497,80 @@ CONVERGED_WITHIN = 0.10
 def section_step_convergence(ctx: Context) -> list[str]:
     """A bound pair's mean r and travel per 100 periods against the time step, the solver iterations and the
     solver's residual threshold (issue #11, item 1); the reference is the finest step with the most iterations
-    and the strictest threshold."""
+    and the strictest threshold.
+
+    A grid over more than the solver (e.g. ``physics.restitution``) gives one block of rows per setting, each
+    against its own finest step, and one curve per setting and solver in ``step_convergence.png``.
+    """
     # a setting = (time step, solver iterations, residual threshold); sorted coarse to loose, fine to strict,
-    # so the last is the reference
+    # so the last is the reference; a variant = the trial's other grid values
     Setting = tuple[float, int, float]
-    by_setting: dict[Setting, list[dict[str, Any]]] = defaultdict(list)
-    trials_at: dict[Setting, int] = defaultdict(int)
+    Variant = tuple[tuple[str, Any], ...]
+    solver_keys = ('physics.time_step', 'physics.solver_iterations', 'physics.solver_residual_threshold')
+    by_setting: dict[tuple[Variant, Setting], list[dict[str, Any]]] = defaultdict(list)
+    trials_at: dict[tuple[Variant, Setting], int] = defaultdict(int)
     for t, r in ctx.ok():
         ph = config_of(t.params).physics
         threshold = ph.solver_residual_threshold
         if threshold is None:
             threshold = BULLET_SOLVER_RESIDUAL_THRESHOLD
-        setting = (ph.time_step, ph.solver_iterations, threshold)
-        trials_at[setting] += 1
+        variant = tuple(sorted((k, v) for k, v in t.point.items() if k not in solver_keys))
+        key = (variant, (ph.time_step, ph.solver_iterations, threshold))
+        trials_at[key] += 1
         longest = max(r.get('gliders') or [], key=lambda g: g['lifetime_periods'], default=None)
         if longest is not None:
-            by_setting[setting].append(longest)
-    settings = sorted(trials_at, key=lambda s: (-s[0], s[1], -s[2]))
-    if not settings:
+            by_setting[key].append(longest)
+    if not trials_at:
         return ['No trials yet.']
-    figures: dict[str, dict[Setting, Estimate]] = {'r': {}, 'travel': {}}
-    for setting in settings:
-        gl = by_setting.get(setting, [])
-        figures['r'][setting] = bootstrap_mean([g['r_bl'] for g in gl if g['r_bl'] is not None])
-        figures['travel'][setting] = bootstrap_mean([100.0 * g['v_com_w_per_period'] for g in gl
-                                                     if g['v_com_w_per_period'] is not None])
-    finest = settings[-1]
+    variants = sorted({v for v, _ in trials_at}, key=str)
+    columns = sorted({k for v in variants for k, _ in v})
+    figures: dict[str, dict[tuple[Variant, Setting], Estimate]] = {'r': {}, 'travel': {}}
+    for key in trials_at:
+        gl = by_setting.get(key, [])
+        figures['r'][key] = bootstrap_mean([g['r_bl'] for g in gl if g['r_bl'] is not None])
+        figures['travel'][key] = bootstrap_mean([100.0 * g['v_com_w_per_period'] for g in gl
+                                                 if g['v_com_w_per_period'] is not None])
 
-    def off(name: str, setting: Setting) -> tuple[str, bool | None]:
-        est, ref = figures[name][setting], figures[name][finest]
+    def off(name: str, key: tuple[Variant, Setting], finest: tuple[Variant, Setting]) -> tuple[str, bool | None]:
+        est, ref = figures[name][key], figures[name][finest]
         if not (math.isfinite(est.value) and math.isfinite(ref.value)) or ref.value == 0.0:
             return 'n/a', None
         rel = (est.value - ref.value) / abs(ref.value)
         half = sum((e.high - e.low) / 2.0 for e in (est, ref) if math.isfinite(e.low) and math.isfinite(e.high))
         return f'{rel:+.1%}', abs(rel) <= CONVERGED_WITHIN or abs(est.value - ref.value) <= half
 
-    lines = ['| time step | solver iterations | residual threshold | pairs with a glider | glider mean r (BL) [95 %] | '
-             'off the finest | travel per 100 periods (W) [95 %] | off the finest | converged |',
-             '| --- | ---: | ---: | ---: | --- | ---: | --- | ---: | --- |']
-    for setting in settings:
-        r_off, r_ok = off('r', setting)
-        v_off, v_ok = off('travel', setting)
-        both = None if r_ok is None or v_ok is None else (r_ok and v_ok)
-        lines.append(f'| 1/{1.0 / setting[0]:.0f} s | {setting[1]} | {setting[2]:.0e} | '
-                     f'{len(by_setting.get(setting, []))}/{trials_at[setting]} | {figures["r"][setting].text(".3f")} | '
-                     f'{r_off} | {figures["travel"][setting].text(".2f")} | {v_off} | '
-                     f'{_yes_no(both) if setting != finest else "(reference)"} |')
+    lines = ['| ' + ''.join(f'{k} | ' for k in columns) + 'time step | solver iterations | residual threshold | '
+             'pairs with a glider | glider mean r (BL) [95 %] | off the finest | travel per 100 periods (W) [95 %] | '
+             'off the finest | converged |',
+             '| ' + '---: | ' * len(columns) + '--- | ---: | ---: | ---: | --- | ---: | --- | ---: | --- |']
     fig = figure(9, 4)
-    for panel, (name, label) in enumerate((('r', 'glider mean r (BL)'), ('travel', 'travel per 100 periods (W)'))):
-        ax = fig.add_subplot(1, 2, panel + 1)
-        for solver in sorted({s[1:] for s in settings}, key=lambda v: (v[0], -v[1])):
-            same = [s for s in settings if s[1:] == solver]
-            ests = [figures[name][s] for s in same]
-            err = np.array([[e.value - e.low if math.isfinite(e.low) else 0.0 for e in ests],
-                            [e.high - e.value if math.isfinite(e.high) else 0.0 for e in ests]])
-            residual = '' if solver[1] == BULLET_SOLVER_RESIDUAL_THRESHOLD else f', residual {solver[1]:.0e}'
-            ax.errorbar([1.0 / s[0] for s in same], [e.value for e in ests], yerr=err, fmt='o-', capsize=3,
-                        label=f'{solver[0]} solver iterations{residual}')
+    axes = [fig.add_subplot(1, 2, panel + 1) for panel in range(2)]
+    for variant in variants:
+        values_of = dict(variant)
+        settings = sorted((s for v, s in trials_at if v == variant), key=lambda s: (-s[0], s[1], -s[2]))
+        finest = (variant, settings[-1])
+        for setting in settings:
+            key = (variant, setting)
+            r_off, r_ok = off('r', key, finest)
+            v_off, v_ok = off('travel', key, finest)
+            both = None if r_ok is None or v_ok is None else (r_ok and v_ok)
+            lines.append('| ' + ''.join(f'{values_of.get(k, "")} | ' for k in columns)
+                         + f'1/{1.0 / setting[0]:.0f} s | {setting[1]} | {setting[2]:.0e} | '
+                         f'{len(by_setting.get(key, []))}/{trials_at[key]} | {figures["r"][key].text(".3f")} | '
+                         f'{r_off} | {figures["travel"][key].text(".2f")} | {v_off} | '
+                         f'{_yes_no(both) if key != finest else "(reference)"} |')
+        prefix = ', '.join(f'{k} {v}' for k, v in variant)
+        for ax, name in zip(axes, ('r', 'travel'), strict=True):
+            for solver in sorted({s[1:] for s in settings}, key=lambda v: (v[0], -v[1])):
+                same = [s for s in settings if s[1:] == solver]
+                ests = [figures[name][(variant, s)] for s in same]
+                err = np.array([[e.value - e.low if math.isfinite(e.low) else 0.0 for e in ests],
+                                [e.high - e.value if math.isfinite(e.high) else 0.0 for e in ests]])
+                residual = '' if solver[1] == BULLET_SOLVER_RESIDUAL_THRESHOLD else f', residual {solver[1]:.0e}'
+                label = f'{solver[0]} solver iterations{residual}'
+                ax.errorbar([1.0 / s[0] for s in same], [e.value for e in ests], yerr=err, fmt='o-', capsize=3,
+                            label=f'{prefix}: {label}' if prefix else label)
+    for ax, label in zip(axes, ('glider mean r (BL)', 'travel per 100 periods (W)'), strict=True):
         legend(ax, 7)
         ax.set_xscale('log', base=2)
         ax.set_xlabel('physics rate (1 / time step, Hz)')
@@ -561,8 +578,8 @@ def section_step_convergence(ctx: Context) -> list[str]:
     ctx.save(fig, 'step_convergence')
     return [f'Per pair: its longest glider (mean r over its periods; travel = its V_com x 100 periods). The '
             f'reference is the finest step (with the most solver iterations and the strictest residual threshold '
-            f'there); converged = within {CONVERGED_WITHIN:.0%} of it or within the two '
-            f'values\' combined 95 % half-widths, for both figures. Residual threshold: Bullet\'s '
+            f'there){" of each setting" if columns else ""}; converged = within {CONVERGED_WITHIN:.0%} of it or '
+            f'within the two values\' combined 95 % half-widths, for both figures. Residual threshold: Bullet\'s '
             f'solverResidualThreshold ({BULLET_SOLVER_RESIDUAL_THRESHOLD:.0e} is its own default).', '', *lines, '',
             '![step convergence](step_convergence.png)']
 

@@ -189,6 +189,31 @@ def test_step_convergence_takes_the_strictest_residual_threshold_as_the_referenc
     assert rows[1].endswith('| yes |') and rows[2].endswith('| (reference) |')
 
 
+def test_step_convergence_gives_each_other_setting_its_own_reference(tmp_path: Path) -> None:
+    """A grid over more than the solver (here the restitution) gives one block per setting, each compared with
+    its own finest step, not with another setting's."""
+    spec = spec_from_mapping({'name': 'parts', 'kind': 'pair', 'seeds': 4, 'report': ['step_convergence'],
+                              'grid': {'physics.restitution': [0.0, 0.8], 'physics.time_step': [1 / 960, 1 / 3840]}})
+    trials = spec.trials(CODE)
+    store = ResultStore(tmp_path / 'parts')
+    travel = {(0.0, 1 / 960): 1.66, (0.0, 1 / 3840): 1.59, (0.8, 1 / 960): 4.12, (0.8, 1 / 3840): 3.29}
+    for t in trials:
+        physics = t.params['physics']
+        g = {**glider(150, 'C1', 180.0), 'r_bl': 1.50,
+             'v_com_w_per_period': travel[(physics['restitution'], physics['time_step'])] / 100.0}
+        store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': dict(t.point), 'status': 'ok',
+                     'result': {'trouble': '', 'gliders': [g]}})
+    report = write_report(spec, trials, store, CODE).read_text()
+    assert '| physics.restitution | time step | solver iterations |' in report
+    rows = [line for line in report.splitlines() if line.startswith(('| 0.0 |', '| 0.8 |'))]
+    assert [row.split(' | ')[:2] for row in rows] == [['| 0.0', '1/960 s'], ['| 0.0', '1/3840 s'],
+                                                      ['| 0.8', '1/960 s'], ['| 0.8', '1/3840 s']]
+    assert '| +4.4% |' in rows[0] and rows[0].endswith('| yes |') and rows[1].endswith('| (reference) |')
+    assert '| +25.2% |' in rows[2] and rows[2].endswith('| no |') and rows[3].endswith('| (reference) |')
+    assert 'of each setting' in report
+    assert (store.folder / 'report-parts' / 'step_convergence.png').stat().st_size > 0
+
+
 def test_end_groups_link_robots_through_their_neighbours() -> None:
     import numpy as np
 
