@@ -489,6 +489,18 @@ def section_alpha_sweep(ctx: Context) -> list[str]:
             *lines, '', '![alpha sweep](alpha_sweep.png)']
 
 
+def other_grid_values(point: Mapping[str, Any], swept: Sequence[str]) -> tuple[tuple[str, Any], ...]:
+    """A trial's grid values other than the ones a section sweeps itself (``swept``), sorted by key: the
+    setting a section keeps apart in its own rows."""
+    return tuple(sorted((k, v) for k, v in point.items() if k not in swept))
+
+
+def setting_cells(setting: tuple[tuple[str, Any], ...], keys: Sequence[str]) -> str:
+    """The table cells of ``setting`` under the columns ``keys`` (empty where it has no value)."""
+    values = dict(setting)
+    return ''.join(f'{values.get(k, "")} | ' for k in keys)
+
+
 #: ``step_convergence``: a figure counts as converged at a step if it is within this fraction of its value at
 #: the finest step of the spec, or within the two values' combined 95 % half-widths (issue #11, item 1).
 CONVERGED_WITHIN = 0.10
@@ -514,7 +526,7 @@ def section_step_convergence(ctx: Context) -> list[str]:
         threshold = ph.solver_residual_threshold
         if threshold is None:
             threshold = BULLET_SOLVER_RESIDUAL_THRESHOLD
-        variant = tuple(sorted((k, v) for k, v in t.point.items() if k not in solver_keys))
+        variant = other_grid_values(t.point, solver_keys)
         key = (variant, (ph.time_step, ph.solver_iterations, threshold))
         trials_at[key] += 1
         longest = max(r.get('gliders') or [], key=lambda g: g['lifetime_periods'], default=None)
@@ -546,7 +558,6 @@ def section_step_convergence(ctx: Context) -> list[str]:
     fig = figure(9, 4)
     axes = [fig.add_subplot(1, 2, panel + 1) for panel in range(2)]
     for variant in variants:
-        values_of = dict(variant)
         settings = sorted((s for v, s in trials_at if v == variant), key=lambda s: (-s[0], s[1], -s[2]))
         finest = (variant, settings[-1])
         for setting in settings:
@@ -554,7 +565,7 @@ def section_step_convergence(ctx: Context) -> list[str]:
             r_off, r_ok = off('r', key, finest)
             v_off, v_ok = off('travel', key, finest)
             both = None if r_ok is None or v_ok is None else (r_ok and v_ok)
-            lines.append('| ' + ''.join(f'{values_of.get(k, "")} | ' for k in columns)
+            lines.append('| ' + setting_cells(variant, columns)
                          + f'1/{1.0 / setting[0]:.0f} s | {setting[1]} | {setting[2]:.0e} | '
                          f'{len(by_setting.get(key, []))}/{trials_at[key]} | {figures["r"][key].text(".3f")} | '
                          f'{r_off} | {figures["travel"][key].text(".2f")} | {v_off} | '
@@ -593,7 +604,7 @@ def section_p6(ctx: Context) -> list[str]:
     Key = tuple[tuple[tuple[str, Any], ...], float, bool]
     groups: dict[Key, list[dict[str, Any]]] = defaultdict(list)
     for t, r in ctx.ok():
-        setting = tuple(sorted((k, v) for k, v in t.point.items() if k not in ('alpha_max_deg', 'feedback')))
+        setting = other_grid_values(t.point, ('alpha_max_deg', 'feedback'))
         groups[(setting, float(t.params['alpha_max_deg']), bool(t.params['feedback']))].append(r)
     keys = sorted({k for setting, _, _ in groups for k, _ in setting})
     lines = ['| ' + ''.join(f'{k} | ' for k in keys) + 'condition | trials | reached the end | KM median lifetime '
@@ -606,7 +617,6 @@ def section_p6(ctx: Context) -> list[str]:
     labels = []
     for x, (cond, rows) in enumerate(order):
         setting, alpha, feedback = cond
-        values_of = dict(setting)
         label = f'{"feedback" if feedback else "open loop"} {alpha:g} deg'
         short = f'{"fb" if feedback else "ol"} {alpha:g}' + ''.join(f' {v:g}' if isinstance(v, float) else f' {v}'
                                                                      for _, v in setting)
@@ -615,7 +625,7 @@ def section_p6(ctx: Context) -> list[str]:
         medians[cond] = km.median
         life = np.array([r['lifetime_periods'] for r in rows], dtype=float)
         se = life.std(ddof=1) / np.sqrt(life.size) if life.size > 1 else float('nan')
-        lines.append('| ' + ''.join(f'{values_of.get(k, "")} | ' for k in keys)
+        lines.append('| ' + setting_cells(setting, keys)
                      + f'{label} | {len(rows)} | {km.censored} | {km.median.text(".0f")} | {life.mean():.1f} +- '
                      f'{se:.1f} | {np.mean([r["halts"] for r in rows]):.1f} |')
         ax1.scatter(x + np.linspace(-0.15, 0.15, life.size), life, s=12)
@@ -660,7 +670,7 @@ def section_drift(ctx: Context) -> list[str]:
     """
     groups: dict[tuple[tuple[str, Any], ...], dict[float, list[float]]] = defaultdict(lambda: defaultdict(list))
     for t, r in ctx.ok():
-        setting = tuple(sorted((k, v) for k, v in t.point.items() if k != 'alpha_max_deg'))
+        setting = other_grid_values(t.point, ('alpha_max_deg',))
         groups[setting][float(t.params['alpha_max_deg'])].append(r['drift_um_per_cycle'])
     target = _paper(ctx, 'drift_um', 75.0)
     keys = sorted({k for setting in groups for k, _ in setting})
@@ -668,13 +678,12 @@ def section_drift(ctx: Context) -> list[str]:
              '| ' + '---: | ' * len(keys) + '---: | ---: | --- |']
     curves = []
     for setting, by_alpha in sorted(groups.items(), key=lambda kv: str(kv[0])):
-        values_of = dict(setting)
         label = ', '.join(f'{k} {v}' for k, v in setting) or 'drift'
         curve = []
         for alpha, values in sorted(by_alpha.items()):
             est = bootstrap_mean(values)
             curve.append((alpha, est))
-            lines.append('| ' + ''.join(f'{values_of.get(k, "")} | ' for k in keys)
+            lines.append('| ' + setting_cells(setting, keys)
                          + f'{alpha:g} | {len(values)} | {est.text(".1f")} |')
             if alpha == 90.0:
                 name = 'P7 drift per cycle at 90 deg (um)' + (f' ({label})' if setting else '')
