@@ -191,6 +191,18 @@ def _tail(flags: Sequence[bool]) -> int:
 
 def pair_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
     """P4/P5: two robots from pair coordinates; binding at the end, travel, and the pair's gliders."""
+    return _pair(p, seed, mujoco=False)
+
+
+def pair_mujoco_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+    """The pair kind's trial stepped by MuJoCo instead of Bullet (``smarticle_sim.mujoco_engine``): the same
+    robots, start and gait; soft contacts with an isotropic friction cone. ``mujoco`` sets ``MujocoSettings``
+    fields. A period counts as colliding if the robots touched at any servo update (1/960 s) in it."""
+    return _pair(p, seed, mujoco=True)
+
+
+def _pair(p: Mapping[str, Any], seed: int, mujoco: bool) -> dict[str, Any]:
+    """The pair kind in either engine."""
     config = config_of(p)
     gait = make_gait(config, p['alpha_max_deg'], p['servo_speed'])
     r, theta, phi = pair_start(p, seed)
@@ -200,17 +212,25 @@ def pair_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
                            (0.0, float(p['phase2'])), seed=seed)
     except SceneError as exc:
         return {**start, 'admissible': False, 'why': str(exc), 'trouble': '', 'gliders': []}
-    watch = ContactPeriods(gait.period)   # contact at every physics step: a kick lasts one to a few steps
-    rec = run_trial(config, scene, float(p['periods']), sample_every=int(p['sample_every']), record_contacts=True,
-                    controllers=lambda physics, gaits: [watch])
+    per = max(1, round(gait.period / (config.physics.control_tick * int(p['sample_every']))))
+    if mujoco:
+        from smarticle_sim.mujoco_engine import MujocoSettings, run_mujoco
+
+        rec = run_mujoco(config, scene, float(p['periods']), int(p['sample_every']),
+                         MujocoSettings(**dict(p.get('mujoco') or {})))
+        touched = {q for q in range((len(rec.time) - 1) // per)
+                   if rec.contacts[q * per + 1:(q + 1) * per + 1, 0, 1].any()}
+    else:
+        watch = ContactPeriods(gait.period)   # contact at every physics step: a kick lasts one to a few steps
+        rec = run_trial(config, scene, float(p['periods']), sample_every=int(p['sample_every']), record_contacts=True,
+                        controllers=lambda physics, gaits: [watch])
+        touched = watch.periods.get((0, 1), set())
     out = analyse_recording(config, rec, gait.period, p)
     bl = config.robot.body_length
-    per = max(1, round(gait.period / (config.physics.control_tick * int(p['sample_every']))))
     touching = rec.contacts[:, 0, 1]
     r_all = np.hypot(*(rec.poses[:, 1, :2] - rec.poses[:, 0, :2]).T) / bl
     bound = [bool(touching[q * per:(q + 1) * per].any() or (r_all[q * per:(q + 1) * per] < p['r_bind_bl']).any())
              for q in range(len(touching) // per)]
-    touched = watch.periods.get((0, 1), set())
     colliding = [q in touched for q in range(len(bound))]
     tail, colliding_tail = _tail(bound), _tail(colliding)
     com = rec.poses[::per, :, :2].mean(axis=1) / bl
@@ -227,12 +247,28 @@ def pair_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
 
 def single_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
     """P7: one robot alone (heading drawn from the seed); drift per cycle in micrometres."""
+    return _single(p, seed, mujoco=False)
+
+
+def single_mujoco_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+    """The single kind's trial stepped by MuJoCo (``mujoco`` sets ``MujocoSettings`` fields)."""
+    return _single(p, seed, mujoco=True)
+
+
+def _single(p: Mapping[str, Any], seed: int, mujoco: bool) -> dict[str, Any]:
+    """The single kind in either engine."""
     config = config_of(p)
     gait = make_gait(config, p['alpha_max_deg'], p['servo_speed'])
     heading = float(np.random.default_rng(seed).uniform(-math.pi, math.pi))
     a = gait.alpha_max
     scene = Scene((RobotPlacement(0.0, 0.0, heading, a, a, gait),), name='single', seed=seed)
-    rec = run_trial(config, scene, float(p['periods']), sample_every=int(p['sample_every']))
+    if mujoco:
+        from smarticle_sim.mujoco_engine import MujocoSettings, run_mujoco
+
+        rec = run_mujoco(config, scene, float(p['periods']), int(p['sample_every']),
+                         MujocoSettings(**dict(p.get('mujoco') or {})))
+    else:
+        rec = run_trial(config, scene, float(p['periods']), sample_every=int(p['sample_every']))
     per = max(1, round(gait.period / (config.physics.control_tick * int(p['sample_every']))))
     xy = rec.poses[::per, 0, :2]
     cycles = max(len(xy) - 1, 1)
@@ -318,8 +354,14 @@ KINDS: dict[str, TrialKind] = {
                                    'phi_deg': 180.0, 'phase2': 0.0, 'start_jitter': [0.0, 0.0, 0.0],
                                    'sample_every': 2, 'min_periods': 10, 'bound_tail': 5},
                       'two robots from pair coordinates (P4 basin scan, P5 alpha_max sweep)'),
+    'pair_mujoco': TrialKind(pair_mujoco_trial, {**_COMMON, **_GLIDERS, 'periods': 75.0, 'r_bl': 1.3, 'theta_deg': 0.0,
+                                                 'phi_deg': 180.0, 'phase2': 0.0, 'start_jitter': [0.0, 0.0, 0.0],
+                                                 'sample_every': 2, 'min_periods': 10, 'bound_tail': 5, 'mujoco': {}},
+                             'the pair kind stepped by MuJoCo (cross-engine check; smarticle_sim.mujoco_engine)'),
     'single': TrialKind(single_trial, {**_COMMON, 'periods': 20.0, 'sample_every': 1},
                         'one robot alone, drift per cycle (P7)'),
+    'single_mujoco': TrialKind(single_mujoco_trial, {**_COMMON, 'periods': 20.0, 'sample_every': 1, 'mujoco': {}},
+                               'the single kind stepped by MuJoCo (cross-engine check)'),
     'p6': TrialKind(p6_trial, {'periods': 100.0, 'alpha_max_deg': 90.0, 'feedback': False, 'start': 'harvested',
                                'physics': {}, 'robot': {}},
                     'C2 pair of the feedback robot, open loop or feedback (P6; smarticle_experiments.p6)'),
@@ -369,6 +411,14 @@ def validate_params(kind: str, params: Mapping[str, Any]) -> None:
             replace(NoiseConfig.none(), **noise_mapping(params.get('noise')))
             return
         config = config_of(params)
+        if kind in ('pair_mujoco', 'single_mujoco'):
+            from smarticle_sim.errors import SimError
+            from smarticle_sim.mujoco_engine import MujocoSettings
+
+            try:
+                MujocoSettings(**dict(params.get('mujoco') or {}))
+            except SimError as exc:
+                raise SpecError(str(exc)) from None
         if kind == 'accuracy':
             make_config(str(params['preset']), {**dict(params.get('physics') or {}),
                                                 'time_step': 1.0 / float(params['rate_hz']),
