@@ -39,7 +39,8 @@ from typing import Any
 import yaml
 
 from .errors import SpecError
-from .trials import KINDS, NOISE_FIELDS, PHYSICS_FIELDS, ROBOT_FIELDS, noise_mapping, resolve_kind, validate_params
+from .trials import (KINDS, MUJOCO_FIELDS, NOISE_FIELDS, PHYSICS_FIELDS, ROBOT_FIELDS, noise_mapping, resolve_kind,
+                     validate_params)
 
 #: The sections a spec's ``report`` may name (``report.SECTIONS`` draws each; a test keeps the two equal).
 REPORT_SECTIONS: tuple[str, ...] = ('p1', 'trajectories', 'configurations', 'lifetimes', 'basin', 'alpha_sweep',
@@ -208,11 +209,12 @@ def _grid_block(name: str, kind: str, known: Any, block: Mapping[str, Any]) -> d
     for key, values in block.items():
         group, dot, leaf = str(key).partition('.')
         if dot:
-            allowed = {'physics': PHYSICS_FIELDS, 'robot': ROBOT_FIELDS, 'noise': NOISE_FIELDS}.get(group)
+            allowed = {'physics': PHYSICS_FIELDS, 'robot': ROBOT_FIELDS, 'noise': NOISE_FIELDS,
+                       'mujoco': MUJOCO_FIELDS}.get(group)
             unsupported = known is not None and group != 'noise' and group not in known.defaults
             if allowed is None or leaf not in allowed or unsupported:
                 raise SpecError(f'{name}: unknown key grid.{key} '
-                                f'(not a physics, robot or noise setting of kind {kind!r})')
+                                f'(not a physics, robot, noise or mujoco setting of kind {kind!r})')
         elif known is not None and (key not in known.defaults or key in ('physics', 'robot')):
             raise SpecError(f'{name}: unknown key grid.{key} for kind {kind!r}')
         if not isinstance(values, list):

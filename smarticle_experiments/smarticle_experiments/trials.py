@@ -25,8 +25,9 @@ from typing import Any
 import numpy as np
 from smarticle_common.gait import GaitConfig
 from smarticle_sim.batch import Recording, run_trial
-from smarticle_sim.errors import SceneError
+from smarticle_sim.errors import SceneError, SimError
 from smarticle_sim.runner import ContactPeriods
+from smarticle_sim.mujoco_engine import MujocoSettings, run_mujoco
 from smarticle_sim.scenes import RobotPlacement, Scene, dense_scene, pair_scene
 from smarticle_sim.settings import NoiseConfig, PhysicsConfig, RobotSpec, SimConfig, robot_preset
 from smarticle_tracking.gliders import Glider, GliderConfig, analyse_gliders
@@ -41,6 +42,8 @@ PHYSICS_FIELDS: frozenset[str] = frozenset(f.name for f in fields(PhysicsConfig)
 ROBOT_FIELDS: frozenset[str] = frozenset(f.name for f in fields(RobotSpec)) - {'name'}
 #: NoiseConfig field names a spec may set (``noise:`` mapping; unset fields are off, ``NoiseConfig.none()``).
 NOISE_FIELDS: frozenset[str] = frozenset(f.name for f in fields(NoiseConfig))
+#: MujocoSettings field names the MuJoCo kinds take (``params: {mujoco: {...}}`` or grid keys ``mujoco.X``).
+MUJOCO_FIELDS: frozenset[str] = frozenset(f.name for f in fields(MujocoSettings))
 
 
 def noise_mapping(value: Any) -> dict[str, Any]:
@@ -214,8 +217,6 @@ def _pair(p: Mapping[str, Any], seed: int, mujoco: bool) -> dict[str, Any]:
         return {**start, 'admissible': False, 'why': str(exc), 'trouble': '', 'gliders': []}
     per = max(1, round(gait.period / (config.physics.control_tick * int(p['sample_every']))))
     if mujoco:
-        from smarticle_sim.mujoco_engine import MujocoSettings, run_mujoco
-
         rec = run_mujoco(config, scene, float(p['periods']), int(p['sample_every']),
                          MujocoSettings(**dict(p.get('mujoco') or {})))
         touched = {q for q in range((len(rec.time) - 1) // per)
@@ -263,8 +264,6 @@ def _single(p: Mapping[str, Any], seed: int, mujoco: bool) -> dict[str, Any]:
     a = gait.alpha_max
     scene = Scene((RobotPlacement(0.0, 0.0, heading, a, a, gait),), name='single', seed=seed)
     if mujoco:
-        from smarticle_sim.mujoco_engine import MujocoSettings, run_mujoco
-
         rec = run_mujoco(config, scene, float(p['periods']), int(p['sample_every']),
                          MujocoSettings(**dict(p.get('mujoco') or {})))
     else:
@@ -412,9 +411,6 @@ def validate_params(kind: str, params: Mapping[str, Any]) -> None:
             return
         config = config_of(params)
         if kind in ('pair_mujoco', 'single_mujoco'):
-            from smarticle_sim.errors import SimError
-            from smarticle_sim.mujoco_engine import MujocoSettings
-
             try:
                 MujocoSettings(**dict(params.get('mujoco') or {}))
             except SimError as exc:

@@ -27,9 +27,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import mujoco
 import numpy as np
 from smarticle_common.gait import TIME_EPS, SquareGait
 from smarticle_common.poses import body_headings_and_tilts
@@ -39,6 +38,9 @@ from smarticle_common.topics import FSR_FACES
 from .errors import SimError
 from .scenes import Scene
 from .settings import SimConfig
+
+if TYPE_CHECKING:
+    import mujoco
 
 
 @dataclass(frozen=True)
@@ -75,6 +77,8 @@ class MujocoSettings:
 
 def build_model(config: SimConfig, scene: Scene, settings: MujocoSettings) -> mujoco.MjModel:
     """The MJCF model of ``scene``'s robots on the plate (body ``robot{k}``, hinges ``robot{k}_arm{j}``)."""
+    import mujoco   # here, so that the settings can be imported (e.g. to check a spec) without the engine
+
     spec, ph = config.robot, config.physics
     w, d, h = spec.body_width, spec.body_depth, spec.body_height
     half_l, half_t, half_h = spec.arm_length / 2.0, spec.arm_thickness / 2.0, spec.arm_height / 2.0
@@ -118,6 +122,8 @@ def run_mujoco(config: SimConfig, scene: Scene, periods: float, sample_every: in
     Samples every ``sample_every`` control ticks (``PhysicsConfig.control_tick``), like ``run_trial``;
     ``contacts[s]`` is True for a pair of robots that touched at any servo update (1/960 s) since the sample before.
     """
+    import mujoco
+
     settings = settings or MujocoSettings()
     periods_ok = isinstance(periods, (int, float)) and math.isfinite(periods) and periods > 0
     if not periods_ok:
