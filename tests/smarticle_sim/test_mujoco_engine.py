@@ -1,0 +1,92 @@
+"""The cross-engine check: the same robots, scene and gait in MuJoCo as in Bullet."""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+import pytest
+from smarticle_common.gait import GaitConfig
+
+from smarticle_sim.errors import SimError
+from smarticle_sim.mujoco_engine import MujocoSettings, build_model, run_mujoco
+from smarticle_sim.physics import ARM_JOINTS, Physics
+from smarticle_sim.scenes import RobotPlacement, Scene, pair_scene
+from smarticle_sim.settings import SimConfig
+
+
+def p5_pair(config: SimConfig, gait: GaitConfig, phase2: float = 0.1) -> Scene:
+    """P5's start (r 1.3 BL, theta 330, phi 180), robot 2 ``phase2`` of a period ahead (its arm part-way)."""
+    return pair_scene(config.robot, gait, 1.3, math.radians(330.0), math.radians(180.0), (0.0, phase2))
+
+
+def test_the_mujoco_robots_are_the_bullet_robots(config: SimConfig, gait90: GaitConfig) -> None:
+    """Every link's centre of mass and every body's mass are where and what Bullet has them."""
+    scene = p5_pair(config, gait90)
+    model = build_model(config, scene, MujocoSettings())
+    data = mujoco.MjData(model)
+    for k, robot in enumerate(scene.robots):
+        for j, alpha in enumerate((robot.alpha1, robot.alpha2)):
+            data.qpos[model.jnt_qposadr[model.joint(f'robot{k}_arm{j}').id]] = alpha
+    mujoco.mj_forward(model, data)
+    with Physics(config, scene) as physics:
+        c = physics.client
+        for k, body in enumerate(physics.body_ids):
+            base = np.array(c.getBasePositionAndOrientation(body)[0])
+            assert data.xipos[model.body(f'robot{k}').id] == pytest.approx(base, abs=1e-9)
+            for j, link in enumerate(ARM_JOINTS):
+                com = np.array(c.getLinkState(body, link)[0])
+                assert data.xipos[model.body(f'robot{k}_link{j}').id] == pytest.approx(com, abs=1e-9)
+                assert model.body(f'robot{k}_link{j}').mass[0] == pytest.approx(c.getDynamicsInfo(body, link)[0])
+            assert model.body(f'robot{k}').mass[0] == pytest.approx(c.getDynamicsInfo(body, -1)[0])
+    # the arms of one robot never collide with each other; robots and plate do
+    assert model.nexclude == len(scene.robots)
+
+
+def test_a_lone_robot_follows_its_gait(config: SimConfig, gait90: GaitConfig) -> None:
+    """At every quarter boundary the arms stand at the gait's corner (the servo's lag under its own load)."""
+    a = gait90.alpha_max
+    scene = Scene((RobotPlacement(0.0, 0.0, math.pi / 2.0, a, a, gait90),), name='lone')
+    rec = run_mujoco(config, scene, 1.0, sample_every=1, settings=MujocoSettings(servo_gain=20.0))
+    per_quarter = round(gait90.period / 4.0 / config.physics.control_tick)
+    for q in range(1, 5):
+        assert rec.arm_angles[q * per_quarter, 0] == pytest.approx(gait90.corner(q), abs=0.02)
+    assert rec.trouble == ''
+    assert rec.meta['engine'] == 'mujoco'
+    assert not rec.contacts.any()   # nobody to touch
+
+
+def test_the_same_scene_gives_the_same_trajectory_and_a_pair_touches(config: SimConfig,
+                                                                   gait90: GaitConfig) -> None:
+    scene = p5_pair(config, gait90)
+    first = run_mujoco(config, scene, 2.0, sample_every=2)
+    again = run_mujoco(config, scene, 2.0, sample_every=2)
+    assert np.array_equal(first.poses, again.poses)
+    assert np.array_equal(first.arm_angles, again.arm_angles)
+    assert first.contacts[:, 0, 1].any() and np.array_equal(first.contacts[:, 0, 1], first.contacts[:, 1, 0])
+    assert len(first.time) == round(2.0 * gait90.period / (2 * config.physics.control_tick)) + 1
+    # the pair moved: the robots push each other
+    assert np.abs(first.poses[-1, :, :2] - first.poses[0, :, :2]).max() > 1e-4
+
+
+@pytest.mark.parametrize(('change', 'named'), [
+    ({'contact_timeconst': 1e-4}, 'contact_timeconst'),
+    ({'servo_gain': -1.0}, 'servo_gain'),
+    ({'time_step': math.nan}, 'time_step'),
+    ({'servo_update': 1.5e-4}, 'servo_update'),
+    ({'noslip_iterations': True}, 'noslip_iterations'),
+])
+def test_bad_settings_are_refused_naming_the_field(change: dict, named: str) -> None:
+    with pytest.raises(SimError, match=f'MujocoSettings.{named}'):
+        MujocoSettings(**change)
+
+
+def test_a_bad_run_request_is_refused(config: SimConfig, gait90: GaitConfig) -> None:
+    scene = p5_pair(config, gait90)
+    with pytest.raises(SimError, match='periods'):
+        run_mujoco(config, scene, 0.0, sample_every=2)
+    with pytest.raises(SimError, match='sample_every'):
+        run_mujoco(config, scene, 1.0, sample_every=0)
+    with pytest.raises(SimError, match='servo updates'):
+        run_mujoco(config, scene, 1.0, sample_every=1, settings=MujocoSettings(servo_update=7.0 / 9600.0))
