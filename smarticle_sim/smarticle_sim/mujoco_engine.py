@@ -13,9 +13,12 @@ colliding with each other), the scene (positions, headings, starting arm angles)
 What differs, on purpose: MuJoCo's contacts are soft (a spring-damper of time constant
 ``MujocoSettings.contact_timeconst`` and damping ratio ``contact_dampratio``: 1 absorbs the impact, lower
 values rebound) with an elliptic, isotropic friction cone (Bullet's multibody solver uses a pyramid), at about the
-authors' 1e-4 s step (1/9600 s). The servo is a position actuator on the gait's reference angle with stiffness
-``servo_gain`` (N m/rad), critical damping for the arm's inertia about its hinge and the robot's torque limit
-(``RobotSpec.servo_torque``); a large gain and torque make it the authors' rigid speed-driven motor. A contact
+authors' 1e-4 s step (1/9600 s). The servo is Bullet's: a velocity motor whose speed goal is the gait's
+target (the corner being approached) times ``PhysicsConfig.servo_bandwidth``, capped at the gait's speed and
+updated every ``servo_update`` (the default Bullet step); MuJoCo drives the joint toward that speed with a
+velocity actuator of gain ``servo_kv`` (N m s/rad, integrated implicitly, so a large gain is a stiff motor)
+and the robot's torque limit (``RobotSpec.servo_torque``). A large torque limit makes it the authors' rigid
+speed-driven motor. A contact
 pair takes the larger of the two geoms' friction (MuJoCo's rule): robot-robot pairs get
 ``friction_robot_robot``, body-plate pairs the larger of that and ``friction_body_plate`` (both 0.3 by default).
 
@@ -50,12 +53,12 @@ class MujocoSettings:
     time_step: float = 1.0 / 9600.0      # about the authors' 1e-4 s Chrono step, 10 to a default Bullet step
     contact_timeconst: float = 0.002     # s, the contact spring-damper's time constant (>= 2 steps)
     contact_dampratio: float = 1.0       # 1: no rebound; below 1 the impact rebounds
-    servo_gain: float = 1.0              # N m / rad about the gait's reference angle
+    servo_kv: float = 0.1                # N m s / rad: the velocity actuator's gain (a stiff motor)
     servo_update: float = 1.0 / 960.0    # s between servo reference updates (whole steps; the Bullet step)
     noslip_iterations: int = 0           # MuJoCo's post-solve that removes creep under static friction
 
     def __post_init__(self) -> None:
-        for name in ('time_step', 'contact_timeconst', 'contact_dampratio', 'servo_gain', 'servo_update'):
+        for name in ('time_step', 'contact_timeconst', 'contact_dampratio', 'servo_kv', 'servo_update'):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0.0):
                 raise SimError(f'MujocoSettings.{name} must be a positive number, got {value!r}')
@@ -83,8 +86,6 @@ def build_model(config: SimConfig, scene: Scene, settings: MujocoSettings) -> mu
     w, d, h = spec.body_width, spec.body_depth, spec.body_height
     half_l, half_t, half_h = spec.arm_length / 2.0, spec.arm_thickness / 2.0, spec.arm_height / 2.0
     arm_z = spec.arm_clearance + spec.arm_height / 2.0 - h / 2.0
-    arm_inertia = spec.arm_mass * (spec.arm_length ** 2 + spec.arm_thickness ** 2) / 3.0   # about the hinge
-    damping = 2.0 * math.sqrt(settings.servo_gain * arm_inertia)
     bodies, excludes, actuators = [], [], []
     for k, robot in enumerate(scene.robots):
         yaw = robot.heading - math.pi / 2.0          # the body's x axis from its normal (as in Physics)
@@ -95,7 +96,7 @@ def build_model(config: SimConfig, scene: Scene, settings: MujocoSettings) -> mu
                 f'<joint name="robot{k}_arm{j}" type="hinge" axis="0 0 {axis!r}"/>'
                 f'<geom type="box" pos="{sign * half_l!r} 0 0" size="{half_l!r} {half_t!r} {half_h!r}" '
                 f'mass="{spec.arm_mass!r}" friction="{ph.friction_robot_robot!r} 0 0"/></body>')
-            actuators.append(f'<position joint="robot{k}_arm{j}" kp="{settings.servo_gain!r}" kv="{damping!r}" '
+            actuators.append(f'<velocity joint="robot{k}_arm{j}" kv="{settings.servo_kv!r}" '
                              f'forcelimited="true" forcerange="{-spec.servo_torque!r} {spec.servo_torque!r}"/>')
         bodies.append(
             f'<body name="robot{k}" pos="{robot.x!r} {robot.y!r} {h / 2.0!r}" euler="0 0 {yaw!r}"><freejoint/>'
@@ -147,8 +148,12 @@ def run_mujoco(config: SimConfig, scene: Scene, periods: float, sample_every: in
             owner[g] = int(name[5:].split('_')[0])
     for k, robot in enumerate(scene.robots):
         data.qpos[qpos[2 * k]], data.qpos[qpos[2 * k + 1]] = robot.alpha1, robot.alpha2
-        data.ctrl[2 * k], data.ctrl[2 * k + 1] = robot.alpha1, robot.alpha2
     mujoco.mj_forward(model, data)
+    bandwidth = config.physics.servo_bandwidth
+    if bandwidth is None:   # Bullet's gain per step instead of a bandwidth
+        bandwidth = config.physics.position_gain / config.physics.time_step
+    targets = np.array([[r.alpha1, r.alpha2] for r in scene.robots])
+    speeds = np.zeros(n)
     for gait in gaits:
         if gait is not None:
             gait.start(0.0)
@@ -177,8 +182,11 @@ def run_mujoco(config: SimConfig, scene: Scene, periods: float, sample_every: in
                 t = data.time
                 for k, gait in enumerate(gaits):
                     if gait is not None:
-                        ref = gait.command(t + TIME_EPS).positions
-                        data.ctrl[2 * k], data.ctrl[2 * k + 1] = ref
+                        command = gait.command(t + TIME_EPS)
+                        targets[k], speeds[k] = command.targets, command.speed
+                angles = data.qpos[qpos].reshape(n, 2)
+                goal = np.clip(bandwidth * (targets - angles), -speeds[:, None], speeds[:, None])
+                data.ctrl[:] = goal.ravel()
                 mujoco.mj_step(model, data, nstep=settings.steps_per_update)
                 for c in range(data.ncon):
                     contact = data.contact[c]

@@ -62,8 +62,8 @@ def test_a_users_yaml_file_is_a_spec(tmp_path: Path) -> None:
     ({'noise': {'friction_sd': 0.5}}, 'friction_sd'),
     ({'grid': {'noise.servo_jiter': [0.01]}}, 'grid.noise.servo_jiter'),
     ({'kind': 'p6', 'params': {'start': 'somewhere'}}, 'params.start'),
-    ({'kind': 'pair_mujoco', 'params': {}, 'grid': {'mujoco.servo_gian': [1.0]}}, 'grid.mujoco.servo_gian'),
-    ({'kind': 'pair', 'params': {}, 'grid': {'mujoco.servo_gain': [1.0]}}, 'grid.mujoco.servo_gain'),
+    ({'kind': 'pair_mujoco', 'params': {}, 'grid': {'mujoco.servo_kvv': [1.0]}}, 'grid.mujoco.servo_kvv'),
+    ({'kind': 'pair', 'params': {}, 'grid': {'mujoco.servo_kv': [1.0]}}, 'grid.mujoco.servo_kv'),
     ({'kind': 'pair_mujoco', 'params': {'mujoco': {'contact_timeconst': 1e-5}}}, 'contact_timeconst'),
     ({'kind': 'single_mujoco', 'params': {'mujoco': {'servo_gian': 1.0}}}, 'servo_gian'),
 ])

@@ -48,7 +48,7 @@ def test_a_lone_robot_follows_its_gait(config: SimConfig, gait90: GaitConfig) ->
     """At every quarter boundary the arms stand at the gait's corner (the servo's lag under its own load)."""
     a = gait90.alpha_max
     scene = Scene((RobotPlacement(0.0, 0.0, math.pi / 2.0, a, a, gait90),), name='lone')
-    rec = run_mujoco(config, scene, 1.0, sample_every=1, settings=MujocoSettings(servo_gain=20.0))
+    rec = run_mujoco(config, scene, 1.0, sample_every=1, settings=MujocoSettings())
     per_quarter = round(gait90.period / 4.0 / config.physics.control_tick)
     for q in range(1, 5):
         assert rec.arm_angles[q * per_quarter, 0] == pytest.approx(gait90.corner(q), abs=0.02)
@@ -72,7 +72,7 @@ def test_the_same_scene_gives_the_same_trajectory_and_a_pair_touches(config: Sim
 
 @pytest.mark.parametrize(('change', 'named'), [
     ({'contact_timeconst': 1e-4}, 'contact_timeconst'),
-    ({'servo_gain': -1.0}, 'servo_gain'),
+    ({'servo_kv': -1.0}, 'servo_kv'),
     ({'time_step': math.nan}, 'time_step'),
     ({'servo_update': 1.5e-4}, 'servo_update'),
     ({'noslip_iterations': True}, 'noslip_iterations'),
