@@ -81,6 +81,16 @@ def test_trial_overrides_are_checked() -> None:
     assert len(spec.with_seed_count(5).trials(CODE)) == 5
 
 
+def test_every_grid_point_keeps_its_own_grouped_values() -> None:
+    """A grid key ``group.X`` reaches its own trials only (the trials do not share one mutated mapping)."""
+    spec = spec_from_mapping({'name': 'g', 'kind': 'single_mujoco', 'periods': 2, 'seeds': 1,
+                              'grid': {'mujoco.servo_kv': [0.03, 0.1], 'robot.servo_torque': [0.05, 1.0],
+                                       'noise.clock_rate_sd': [0.0, 0.003]}})
+    seen = [(t.params['mujoco']['servo_kv'], t.params['robot']['servo_torque'], t.params['noise']['clock_rate_sd'])
+            for t in spec.trials(CODE)]
+    assert sorted(seen) == sorted((k, s, n) for k in (0.03, 0.1) for s in (0.05, 1.0) for n in (0.0, 0.003))
+
+
 def test_keys_follow_settings_seed_and_code_version() -> None:
     spec = spec_from_mapping(TINY)
     first = [t.key for t in spec.trials(CODE)]
