@@ -787,11 +787,62 @@ def section_contacts(ctx: Context) -> list[str]:
     return lines
 
 
+def section_pair_paths(ctx: Context) -> list[str]:
+    """The path of each pair's centre (one sample per period), one panel per grid setting, and a table of
+    how far the pairs went and how they ended: does a setting make pairs glide, and which way?"""
+    by_setting: dict[tuple[tuple[str, Any], ...], list[tuple[Trial, dict[str, Any]]]] = defaultdict(list)
+    for t, r in ctx.ok():
+        if r.get('trajectory_bl'):
+            by_setting[other_grid_values(t.point, ())].append((t, r))
+    if not by_setting:
+        return ['No trajectory recorded (the spec needs `trajectory: true`).']
+    settings = sorted(by_setting, key=str)
+    keys = sorted({k for setting in settings for k, _ in setting})
+    cols = min(4, len(settings))
+    rows = math.ceil(len(settings) / cols)
+    fig = figure(3.0 * cols, 3.3 * rows)
+    axes = []
+    lines = ['Each pair\'s centre (the mean of its two robots\' centres), one sample per period; net travel over the '
+             'run and the pair at its end (r, phi).', '',
+             '| ' + ' | '.join(keys) + ' | pairs | net travel of the centre (W): mean [95 %] | per pair | '
+             'r at the end (BL) | phi at the end (deg) |',
+             '| ' + ' | '.join('---:' for _ in keys) + ' | ---: | --- | --- | --- | --- |']
+    for n, setting in enumerate(settings):
+        ax = fig.add_subplot(rows, cols, n + 1)
+        travels = []
+        for t, r in sorted(by_setting[setting], key=lambda tr: tr[0].seed):
+            xy = np.array([[[math.nan if v is None else v for v in q] for q in row] for row in r['trajectory_bl']])
+            centre = np.nanmean(xy[:, :2, :], axis=1) - np.nanmean(xy[0, :2, :], axis=0)
+            travels.append(float(np.hypot(*centre[-1])) if len(centre) else math.nan)
+            ax.plot(centre[:, 0], centre[:, 1], lw=0.9, label=f'seed {t.seed}')
+            ax.plot(centre[-1, 0], centre[-1, 1], 'o', ms=3, color=ax.lines[-1].get_color())
+        axes.append(ax)
+        ax.set_title(', '.join(f'{k.rsplit(".", 1)[-1]} {v}' for k, v in setting) or 'all trials', fontsize=6)
+        ax.set_xlabel('x (BL)', fontsize=7)
+        ax.set_ylabel('y (BL)', fontsize=7)
+        ax.tick_params(labelsize=6)
+        est = bootstrap_mean(travels)
+        ends = [r for _, r in sorted(by_setting[setting], key=lambda tr: tr[0].seed)]
+        r_end = ', '.join(f'{e["r_end_bl"]:.2f}' for e in ends if e.get('r_end_bl') is not None)
+        phi_end = ', '.join(f'{e["phi_end_deg"]:.1f}' for e in ends if e.get('phi_end_deg') is not None)
+        lines.append(f'| {setting_cells(setting, keys)}{len(travels)} | {est.text(".2f")} | '
+                     f'{", ".join(f"{v:.2f}" for v in travels)} | {r_end} | {phi_end} |')
+    reach = max(max(abs(v) for ax in axes for line in ax.lines for v in (*line.get_xdata(), *line.get_ydata())
+                        if math.isfinite(v)), 0.05) * 1.1
+    for ax in axes:   # one scale for every panel: a still pair is a dot beside a glider's path
+        ax.set_xlim(-reach, reach)
+        ax.set_ylim(-reach, reach)
+        ax.set_aspect('equal')
+    fig.tight_layout()
+    ctx.save(fig, 'pair_paths')
+    return [*lines, '', '![pair paths](pair_paths.png)']
+
+
 SECTIONS: dict[str, Callable[[Context], list[str]]] = {
     'p1': section_p1, 'trajectories': section_trajectories, 'configurations': section_configurations,
     'lifetimes': section_lifetimes, 'basin': section_basin, 'alpha_sweep': section_alpha_sweep,
     'p6': section_p6, 'drift': section_drift, 'accuracy': section_accuracy, 'contacts': section_contacts,
-    'step_convergence': section_step_convergence,
+    'step_convergence': section_step_convergence, 'pair_paths': section_pair_paths,
 }
 
 

@@ -44,7 +44,8 @@ from .trials import (KINDS, MUJOCO_FIELDS, NOISE_FIELDS, PHYSICS_FIELDS, ROBOT_F
 
 #: The sections a spec's ``report`` may name (``report.SECTIONS`` draws each; a test keeps the two equal).
 REPORT_SECTIONS: tuple[str, ...] = ('p1', 'trajectories', 'configurations', 'lifetimes', 'basin', 'alpha_sweep',
-                                    'p6', 'drift', 'accuracy', 'contacts', 'step_convergence')
+                                    'p6', 'drift', 'accuracy', 'contacts', 'step_convergence',
+                                    'pair_paths')
 
 SPEC_KEYS: tuple[str, ...] = ('name', 'description', 'kind', 'store', 'preset', 'periods', 'physics', 'robot',
                               'noise', 'params', 'analysis', 'grid', 'seeds', 'report', 'paper')

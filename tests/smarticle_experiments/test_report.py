@@ -294,3 +294,20 @@ def test_the_p6_report_gives_one_row_per_grid_setting_and_compares_within_it(tmp
     logranks = [x for x in report.splitlines() if x.startswith('Log-rank')]
     assert len(logranks) == 1 and 'noise.clock_rate_sd 0.003: ' in logranks[0]
     assert 'ratio feedback / open loop 1.16' in logranks[0]
+
+
+def test_pair_paths_show_which_setting_makes_pairs_travel(tmp_path: Path) -> None:
+    """One row and one panel per grid setting: the pair centre's net travel and how the pairs ended."""
+    spec = spec_from_mapping({'name': 'paths', 'kind': 'pair', 'seeds': 3, 'report': ['pair_paths'],
+                              'grid': {'phase2': [0.0, 0.1]}})
+
+    def result(t: Any) -> dict[str, Any]:
+        step = 0.03 if t.point['phase2'] else 0.0       # W per period of the pair's centre
+        path = [[[k * step, 0.0], [k * step, 1.5]] for k in range(101)]   # two robots 1.5 BL apart
+        return {'trouble': '', 'gliders': [], 'trajectory_bl': path, 'r_end_bl': 1.5, 'phi_end_deg': 180.0}
+
+    report = report_of(spec, tmp_path / 'paths', result)
+    rows = {line.split(' | ')[0].lstrip('| '): line for line in report.splitlines() if line.startswith('| 0.')}
+    assert '| 3 | 3.00 [3.00, 3.00] | 3.00, 3.00, 3.00 |' in rows['0.1']
+    assert '| 3 | 0.00 [0.00, 0.00] | 0.00, 0.00, 0.00 | 1.50, 1.50, 1.50 | 180.0, 180.0, 180.0 |' in rows['0.0']
+    assert (tmp_path / 'paths' / 'report-paths' / 'pair_paths.png').stat().st_size > 0
