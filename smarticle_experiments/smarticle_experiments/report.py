@@ -817,7 +817,8 @@ def section_pair_paths(ctx: Context) -> list[str]:
             ax.plot(centre[:, 0], centre[:, 1], lw=0.9, label=f'seed {t.seed}')
             ax.plot(centre[-1, 0], centre[-1, 1], 'o', ms=3, color=ax.lines[-1].get_color())
         axes.append(ax)
-        ax.set_title(', '.join(f'{k.rsplit(".", 1)[-1]} {v}' for k, v in setting) or 'all trials', fontsize=6)
+        title = [f'{k.rsplit(".", 1)[-1]} {format(v, ".4g") if isinstance(v, float) else v}' for k, v in setting]
+        ax.set_title(', '.join(title) or 'all trials', fontsize=6)
         ax.set_xlabel('x (BL)', fontsize=7)
         ax.set_ylabel('y (BL)', fontsize=7)
         ax.tick_params(labelsize=6)
