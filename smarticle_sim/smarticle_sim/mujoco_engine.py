@@ -12,7 +12,8 @@ colliding with each other), the scene (positions, headings, starting arm angles)
 
 What differs, on purpose: MuJoCo's contacts are soft (a spring-damper of time constant
 ``MujocoSettings.contact_timeconst`` and damping ratio ``contact_dampratio``: 1 absorbs the impact, lower
-values rebound) with an elliptic, isotropic friction cone (Bullet's multibody solver uses a pyramid), at about the
+values rebound) with an elliptic, isotropic friction cone (Bullet's multibody solver uses a pyramid; ``friction_cone``
+'pyramidal' gives MuJoCo's pyramid instead), at about the
 authors' 1e-4 s step (1/9600 s). The servo is Bullet's: a velocity motor whose speed goal is the gait's
 target (the corner being approached) times ``PhysicsConfig.servo_bandwidth``, capped at the gait's speed and
 updated every ``servo_update`` (the default Bullet step); MuJoCo drives the joint toward that speed with a
@@ -56,6 +57,7 @@ class MujocoSettings:
     servo_kv: float = 0.1                # N m s / rad: the velocity actuator's gain (a stiff motor)
     servo_update: float = 1.0 / 960.0    # s between servo reference updates (whole steps; the Bullet step)
     noslip_iterations: int = 0           # MuJoCo's post-solve that removes creep under static friction
+    friction_cone: str = 'elliptic'      # 'elliptic' (isotropic) or 'pyramidal' (Bullet's kind of cone)
 
     def __post_init__(self) -> None:
         for name in ('time_step', 'contact_timeconst', 'contact_dampratio', 'servo_kv', 'servo_update'):
@@ -71,6 +73,10 @@ class MujocoSettings:
         if isinstance(self.noslip_iterations, bool) or not isinstance(self.noslip_iterations, int) \
                 or self.noslip_iterations < 0:
             raise SimError(f'MujocoSettings.noslip_iterations must be an integer >= 0, got {self.noslip_iterations!r}')
+
+        if self.friction_cone not in ('elliptic', 'pyramidal'):
+            raise SimError("MujocoSettings.friction_cone must be 'elliptic' or 'pyramidal', "
+                           f'got {self.friction_cone!r}')
 
     @property
     def steps_per_update(self) -> int:
@@ -105,7 +111,7 @@ def build_model(config: SimConfig, scene: Scene, settings: MujocoSettings) -> mu
         excludes.append(f'<exclude body1="robot{k}_link0" body2="robot{k}_link1"/>')
     half_plate = ph.plate_size / 2.0
     xml = (f'<mujoco><compiler angle="radian"/>'
-           f'<option timestep="{settings.time_step!r}" gravity="0 0 {-ph.gravity!r}" cone="elliptic" '
+           f'<option timestep="{settings.time_step!r}" gravity="0 0 {-ph.gravity!r}" cone="{settings.friction_cone}" '
            f'integrator="implicitfast" noslip_iterations="{settings.noslip_iterations}"/>'
            f'<default><geom condim="3" solref="{settings.contact_timeconst!r} {settings.contact_dampratio!r}"/>'
            f'</default><worldbody>'

@@ -76,6 +76,7 @@ def test_the_same_scene_gives_the_same_trajectory_and_a_pair_touches(config: Sim
     ({'time_step': math.nan}, 'time_step'),
     ({'servo_update': 1.5e-4}, 'servo_update'),
     ({'noslip_iterations': True}, 'noslip_iterations'),
+    ({'friction_cone': 'round'}, 'friction_cone'),
 ])
 def test_bad_settings_are_refused_naming_the_field(change: dict, named: str) -> None:
     with pytest.raises(SimError, match=f'MujocoSettings.{named}'):
