@@ -810,7 +810,8 @@ def section_pair_paths(ctx: Context) -> list[str]:
     for n, setting in enumerate(settings):
         ax = fig.add_subplot(rows, cols, n + 1)
         travels = []
-        for t, r in sorted(by_setting[setting], key=lambda tr: tr[0].seed):
+        trials = sorted(by_setting[setting], key=lambda tr: tr[0].seed)
+        for t, r in trials:
             xy = np.array([[[math.nan if v is None else v for v in q] for q in row] for row in r['trajectory_bl']])
             centre = np.nanmean(xy[:, :2, :], axis=1) - np.nanmean(xy[0, :2, :], axis=0)
             travels.append(float(np.hypot(*centre[-1])) if len(centre) else math.nan)
@@ -823,7 +824,7 @@ def section_pair_paths(ctx: Context) -> list[str]:
         ax.set_ylabel('y (BL)', fontsize=7)
         ax.tick_params(labelsize=6)
         est = bootstrap_mean(travels)
-        ends = [r for _, r in sorted(by_setting[setting], key=lambda tr: tr[0].seed)]
+        ends = [r for _, r in trials]
         r_end = ', '.join(f'{e["r_end_bl"]:.2f}' for e in ends if e.get('r_end_bl') is not None)
         phi_end = ', '.join(f'{e["phi_end_deg"]:.1f}' for e in ends if e.get('phi_end_deg') is not None)
         lines.append(f'| {setting_cells(setting, keys)}{len(travels)} | {est.text(".2f")} | '

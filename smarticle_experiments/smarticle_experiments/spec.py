@@ -164,12 +164,10 @@ def coerce(default: Any, value: Any) -> Any:
 def apply_point(base: Mapping[str, Any], point: Mapping[str, Any]) -> dict[str, Any]:
     """The base parameters with one grid point applied (``physics.X`` / ``robot.X`` / ``noise.X`` /
     ``mujoco.X`` go into those mappings, copied: the base and the other points keep theirs)."""
-    params = {**base}
+    # every mapping copied: a grid point's group.X must not reach the base (or the other points)
+    params = {k: dict(v) if isinstance(v, Mapping) else v for k, v in base.items()}
     if 'physics' in base or 'robot' in base:
         params.update(physics=dict(base.get('physics') or {}), robot=dict(base.get('robot') or {}))
-    for group in ('noise', 'mujoco'):   # a grid point's group.X must not reach the base (or other points)
-        if group in base:
-            params[group] = dict(base[group] or {})
     for name, value in point.items():
         group, dot, leaf = name.partition('.')
         if dot:

@@ -74,6 +74,15 @@ class _PoseReader:
         arms[...] = arm_rows
 
 
+def check_run_request(periods: float, sample_every: Any) -> int:
+    """``sample_every`` as an int, or SimError if ``periods`` is not > 0 or ``sample_every`` not an integer >= 1."""
+    if not (isinstance(periods, (int, float)) and math.isfinite(periods) and periods > 0):
+        raise SimError(f'periods must be > 0, got {periods!r}')
+    if isinstance(sample_every, bool) or not isinstance(sample_every, (int, np.integer)) or sample_every < 1:
+        raise SimError(f'sample_every must be an integer >= 1 tick, got {sample_every!r}')
+    return int(sample_every)
+
+
 def run_trial(config: SimConfig, scene: Scene, periods: float, sample_every: int | None = None,
               record_fsr: bool = False, record_contacts: bool = False,
               progress: bool = False, controllers: ControllerFactory | None = None,
@@ -90,13 +99,9 @@ def run_trial(config: SimConfig, scene: Scene, periods: float, sample_every: int
     every tick; they may record what they did themselves. ``stop`` (asked after every tick) ends the trial
     early; the recording keeps the samples taken so far.
     """
-    if not (math.isfinite(periods) and periods > 0):
-        raise SimError(f'periods must be > 0, got {periods!r}')
     if sample_every is None:
         sample_every = default_sample_every(config)
-    if isinstance(sample_every, bool) or not isinstance(sample_every, (int, np.integer)) or sample_every < 1:
-        raise SimError(f'sample_every must be an integer >= 1 tick, got {sample_every!r}')
-    sample_every = int(sample_every)
+    sample_every = check_run_request(periods, sample_every)
     period = scene_period(scene)
     n = len(scene.robots)
     n_faces = len(FSR_FACES)

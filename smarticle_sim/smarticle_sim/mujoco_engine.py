@@ -39,6 +39,7 @@ from smarticle_common.poses import body_headings_and_tilts
 from smarticle_common.runs import Recording
 from smarticle_common.topics import FSR_FACES
 
+from .batch import check_run_request, scene_period
 from .errors import SimError
 from .scenes import Scene
 from .settings import SimConfig
@@ -132,16 +133,9 @@ def run_mujoco(config: SimConfig, scene: Scene, periods: float, sample_every: in
     import mujoco
 
     settings = settings or MujocoSettings()
-    periods_ok = isinstance(periods, (int, float)) and math.isfinite(periods) and periods > 0
-    if not periods_ok:
-        raise SimError(f'periods must be > 0, got {periods!r}')
-    if isinstance(sample_every, bool) or not isinstance(sample_every, (int, np.integer)) or sample_every < 1:
-        raise SimError(f'sample_every must be an integer >= 1 tick, got {sample_every!r}')
+    sample_every = check_run_request(periods, sample_every)
     gaits = [SquareGait(r.gait) if r.gait is not None else None for r in scene.robots]
-    period_set = {r.gait.period for r in scene.robots if r.gait is not None}
-    if len(period_set) != 1:
-        raise SimError(f'scene {scene.name!r} must have robots with one common gait period')
-    period = period_set.pop()
+    period = scene_period(scene)
     model = build_model(config, scene, settings)
     data = mujoco.MjData(model)
     n = len(scene.robots)
@@ -155,9 +149,7 @@ def run_mujoco(config: SimConfig, scene: Scene, periods: float, sample_every: in
     for k, robot in enumerate(scene.robots):
         data.qpos[qpos[2 * k]], data.qpos[qpos[2 * k + 1]] = robot.alpha1, robot.alpha2
     mujoco.mj_forward(model, data)
-    bandwidth = config.physics.servo_bandwidth
-    if bandwidth is None:   # Bullet's gain per step instead of a bandwidth
-        bandwidth = config.physics.position_gain / config.physics.time_step
+    bandwidth = config.physics.servo_gain() / config.physics.time_step   # Bullet's speed goal per radian
     targets = np.array([[r.alpha1, r.alpha2] for r in scene.robots])
     speeds = np.zeros(n)
     for gait in gaits:
@@ -194,12 +186,11 @@ def run_mujoco(config: SimConfig, scene: Scene, periods: float, sample_every: in
                 goal = np.clip(bandwidth * (targets - angles), -speeds[:, None], speeds[:, None])
                 data.ctrl[:] = goal.ravel()
                 mujoco.mj_step(model, data, nstep=settings.steps_per_update)
-                for c in range(data.ncon):
-                    contact = data.contact[c]
-                    a, b = owner[contact.geom1], owner[contact.geom2]
-                    if a >= 0 and b >= 0 and a != b:
-                        seen[a, b] = seen[b, a] = True
-                        peak_overlap = max(peak_overlap, -float(contact.dist))
+                a, b = owner[data.contact.geom1], owner[data.contact.geom2]
+                robots = (a >= 0) & (b >= 0) & (a != b)
+                if robots.any():
+                    seen[a[robots], b[robots]] = seen[b[robots], a[robots]] = True
+                    peak_overlap = max(peak_overlap, -float(data.contact.dist[robots].min()))
         quats = np.array([data.qpos[f + 3:f + 7] for f in free])           # MuJoCo: w, x, y, z
         heading, tilt = body_headings_and_tilts(quats[:, [1, 2, 3, 0]])
         times[s] = data.time
