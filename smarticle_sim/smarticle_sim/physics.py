@@ -29,10 +29,11 @@ from typing import Sequence
 import numpy as np
 import pybullet
 from pybullet_utils.bullet_client import BulletClient
+from smarticle_common.facts import RobotSpec
 from smarticle_common.poses import body_headings_and_tilts
 from smarticle_common.topics import FSR_FACES
 
-from .settings import PhysicsConfig, SimConfig
+from .settings import AUTHORS_ARM_MASS, AUTHORS_LINK_DENSITY, PhysicsConfig, SimConfig
 from .errors import SceneError, SimError
 from .noise import FrictionField
 from .scenes import RobotPlacement, RobotState, Scene
@@ -139,7 +140,7 @@ class Physics:
             body = c.createMultiBody(
                 spec.body_mass, body_shape, body_visual, [placement.x, placement.y, z],
                 c.getQuaternionFromEuler([0.0, 0.0, yaw]) if state is None else state.orientation,
-                linkMasses=[spec.arm_mass, spec.arm_mass], linkCollisionShapeIndices=arm_shapes,
+                linkMasses=list(arm_masses(spec, ph.mass_model)), linkCollisionShapeIndices=arm_shapes,
                 linkVisualShapeIndices=arm_visuals,
                 linkPositions=[[-w / 2, 0.0, arm_z], [w / 2, 0.0, arm_z]], linkOrientations=[ident, ident],
                 linkInertialFramePositions=[[-half_l, 0.0, 0.0], [half_l, 0.0, 0.0]],
@@ -153,6 +154,9 @@ class Physics:
             for link in ARM_JOINTS:
                 c.changeDynamics(body, link, lateralFriction=arm_friction,
                                  rollingFriction=0.0, spinningFriction=0.0, jointDamping=0.0, **link_contact)
+            if ph.mass_model == 'authors':
+                for link, inertia in enumerate(authors_inertias(spec)):
+                    c.changeDynamics(body, link - 1, localInertiaDiagonal=inertia)
             if ph.tilt_inertia_scale != 1.0 or ph.yaw_inertia_scale != 1.0:
                 ixx, iyy, izz = c.getDynamicsInfo(body, -1)[2]
                 c.changeDynamics(body, -1, localInertiaDiagonal=[ixx * ph.tilt_inertia_scale,
@@ -529,6 +533,31 @@ class FsrReading:
         """Each face's largest reading since the previous call (None: no step since), and start over."""
         peak, self._peak = self._peak, None
         return peak
+
+
+def box_inertia(mass: float, size_x: float, size_y: float, size_z: float) -> tuple[float, float, float]:
+    """The principal moments of inertia (kg m^2) of a uniform box of ``mass`` and edge lengths ``size_*`` (m)."""
+    return (mass * (size_y ** 2 + size_z ** 2) / 12.0, mass * (size_x ** 2 + size_z ** 2) / 12.0,
+            mass * (size_x ** 2 + size_y ** 2) / 12.0)
+
+
+def arm_masses(spec: RobotSpec, mass_model: str = 'uniform') -> tuple[float, float]:
+    """The masses (kg) of arm 1 and arm 2 (joints 0 and 1) under ``PhysicsConfig.mass_model``."""
+    if mass_model == 'authors':
+        return AUTHORS_ARM_MASS, AUTHORS_LINK_DENSITY * spec.arm_length * spec.arm_thickness * spec.arm_height
+    return spec.arm_mass, spec.arm_mass
+
+
+def authors_inertias(spec: RobotSpec) -> tuple[tuple[float, float, float], ...]:
+    """Body, arm 1 and arm 2 inertias (kg m^2, link frames) of the authors' model: boxes of 100 kg/m^3.
+
+    Their code sets the body's and arm 1's masses after building the boxes, which leaves every link the
+    inertia of its 100 kg/m^3 box (``PhysicsConfig.mass_model``).
+    """
+    body = (spec.body_width, spec.body_depth, spec.body_height)
+    arm = (spec.arm_length, spec.arm_thickness, spec.arm_height)
+    return (box_inertia(AUTHORS_LINK_DENSITY * math.prod(body), *body),
+            *(box_inertia(AUTHORS_LINK_DENSITY * math.prod(arm), *arm),) * 2)
 
 
 def robot_link_contact(physics: PhysicsConfig, robot_mass: float) -> dict[str, float]:

@@ -18,6 +18,13 @@ from .errors import ConfigError
 
 #: The arm end shapes ``PhysicsConfig.arm_ends`` accepts.
 ARM_ENDS = ('square', 'round')
+#: ``PhysicsConfig.mass_model``: how a robot's mass and inertia are spread over its three links.
+MASS_MODELS = ('uniform', 'authors')
+#: The authors' published Chrono model of the small robot builds every link as a box of this density and then
+#: sets the mass of the body and of one arm only (``mass_model`` 'authors').
+AUTHORS_LINK_DENSITY = 100.0          # kg/m^3
+#: The mass (kg) their code gives the one arm whose mass it sets (the other keeps its 100 kg/m^3 box: 0.345 g).
+AUTHORS_ARM_MASS = 0.00319
 
 
 #: Soft contacts (``PhysicsConfig.contact_stiffness``): the largest contact-spring angle per step (omega x
@@ -131,6 +138,15 @@ class PhysicsConfig:
     #: measured on P1 as a diagnostic of whether their P1 rests on it (docs/sim_calibration.md, "The
     #: authors' light body"), not taken: a real body with a servo at each end is no lighter in yaw than uniform.
     yaw_inertia_scale: float = 1.0
+    #: How the robot's mass is spread over its links. 'uniform' (the default): the body and two equal arms
+    #: of the robot's spec, each link with the inertia of a uniform box of its mass. 'authors': as the
+    #: authors' published Chrono code builds the small robot, every link's inertia that of a box of density
+    #: 100 kg/m^3 (the body's that of a 3.2 g box), the body's mass the spec's (24.8 g), arm 1 (the left
+    #: arm, joint 0) 3.19 g and arm 2 its 100 kg/m^3 box's 0.345 g (28.3 g in all). Measured as a
+    #: diagnostic of what lets the authors' in-phase pairs glide (docs/sim_calibration.md, "The authors'
+    #: uneven arms"), not taken: a robot with one arm nine times heavier than the other is not the paper's
+    #: robot. The roll / pitch and yaw factors above multiply the body's inertia of either model.
+    mass_model: str = 'uniform'
     #: The arms' ends in plan view. 'square': the authors' box arms (5.0 x 0.3 x 2.3 cm). 'round': the same
     #: box with both vertical end edges rounded to the arm's half thickness (a stadium in plan view: a box
     #: of length L - t between two vertical cylinders of diameter t, same length, height, mass and
@@ -179,6 +195,9 @@ class PhysicsConfig:
         require_non_negative(self, 'ccd_swept_sphere_radius', error=ConfigError)
         require_positive(self, 'tilt_inertia_scale', error=ConfigError)
         require_positive(self, 'yaw_inertia_scale', error=ConfigError)
+        if self.mass_model not in MASS_MODELS:
+            raise ConfigError(f'PhysicsConfig.mass_model must be one of {", ".join(MASS_MODELS)}, '
+                              f'got {self.mass_model!r}')
         if self.arm_ends not in ARM_ENDS:
             raise ConfigError(f'PhysicsConfig.arm_ends must be one of {", ".join(ARM_ENDS)}, got {self.arm_ends!r}')
         if self.restitution_body_plate is not None and self.restitution_body_plate > 1.0:
@@ -359,6 +378,11 @@ class SimConfig:
     def __post_init__(self) -> None:
         """Refuse settings that cannot converge for this robot; warn about ones that converge poorly."""
         ph, spec = self.physics, self.robot
+        small_sized = (spec.body_width, spec.body_depth, spec.arm_length) == (SMALL.body_width, SMALL.body_depth,
+                                                                              SMALL.arm_length)
+        if ph.mass_model == 'authors' and not small_sized:
+            raise ConfigError("PhysicsConfig.mass_model 'authors' is the authors' Chrono model of the paper's small "
+                              'robot; use it with the small preset')
         tip_travel = spec.servo_speed * spec.arm_length * ph.time_step     # arm tip per step at top speed
         if tip_travel >= spec.arm_thickness:
             raise ConfigError(f'PhysicsConfig.time_step: {ph.time_step:.6g} s lets an arm tip travel '

@@ -91,3 +91,5 @@ def test_a_bad_run_request_is_refused(config: SimConfig, gait90: GaitConfig) -> 
         run_mujoco(config, scene, 1.0, sample_every=0)
     with pytest.raises(SimError, match='servo updates'):
         run_mujoco(config, scene, 1.0, sample_every=1, settings=MujocoSettings(servo_update=7.0 / 9600.0))
+    with pytest.raises(SimError, match='mass_model'):
+        run_mujoco(config.with_physics(mass_model='authors'), scene, 1.0, sample_every=2)

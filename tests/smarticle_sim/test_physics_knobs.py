@@ -178,3 +178,26 @@ def test_bullet_gets_the_yaw_inertia_and_only_it(config: SimConfig) -> None:
     assert light_mass == mass
     assert light[:2] == pytest.approx(inertia[:2], rel=1e-6)
     assert light[2] == pytest.approx(0.129 * inertia[2], rel=1e-6)
+
+
+def test_bullet_gets_the_authors_masses_and_inertias(config: SimConfig) -> None:
+    """``mass_model`` 'authors': 24.8 g body, arms of 3.19 and 0.345 g, every link the inertia of a 100 kg/m^3 box."""
+    authors = config.with_physics(mass_model='authors')
+    with Runner.with_gaits(authors, lone_robot()) as run:
+        info = [run.physics.client.getDynamicsInfo(run.physics.body_ids[0], link)[:3] for link in (-1, *ARM_JOINTS)]
+    (body_mass, _, body_inertia), (arm1_mass, _, arm1_inertia), (arm2_mass, _, arm2_inertia) = info
+    assert body_mass == pytest.approx(0.0248) and arm1_mass == pytest.approx(0.00319)
+    assert arm2_mass == pytest.approx(100.0 * 0.05 * 0.003 * 0.023)            # its 100 kg/m^3 box: 0.345 g
+    w, d, h = config.robot.body_width, config.robot.body_depth, config.robot.body_height
+    box = 100.0 * w * d * h                                                    # 3.2 g
+    assert body_inertia == pytest.approx([box * (d * d + h * h) / 12, box * (w * w + h * h) / 12,
+                                          box * (w * w + d * d) / 12], rel=1e-6)
+    assert arm1_inertia == pytest.approx(arm2_inertia, rel=1e-6)                # the same box, unscaled by the mass
+    assert arm1_inertia[2] == pytest.approx(arm2_mass * (0.05 ** 2 + 0.003 ** 2) / 12, rel=1e-6)
+
+
+def test_mass_model_refused_where_it_means_nothing(config: SimConfig) -> None:
+    with pytest.raises(ConfigError, match='mass_model'):
+        PhysicsConfig(mass_model='measured')
+    with pytest.raises(ConfigError, match="mass_model 'authors'"):
+        SimConfig.from_preset('feedback', mass_model='authors')
