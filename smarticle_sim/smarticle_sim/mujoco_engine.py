@@ -91,7 +91,8 @@ def build_model(config: SimConfig, scene: Scene, settings: MujocoSettings) -> mu
 
     spec, ph = config.robot, config.physics
     if ph.mass_model != 'uniform':
-        raise SimError(f'PhysicsConfig.mass_model: the MuJoCo engine builds the uniform robot only, got {ph.mass_model!r}')
+        raise SimError(f'PhysicsConfig.mass_model: the MuJoCo engine builds the uniform robot only, '
+                       f'got {ph.mass_model!r}')
     w, d, h = spec.body_width, spec.body_depth, spec.body_height
     half_l, half_t, half_h = spec.arm_length / 2.0, spec.arm_thickness / 2.0, spec.arm_height / 2.0
     arm_z = spec.arm_clearance + spec.arm_height / 2.0 - h / 2.0
