@@ -109,6 +109,8 @@ class Physics:
         plate_restitution = restitution   # Bullet multiplies the pair's values, like friction
         if ph.restitution_body_plate is not None:
             plate_restitution = ph.restitution_body_plate / restitution if restitution > 0.0 else 0.0
+        if ph.plate_friction_slip is not None:
+            plate_friction = 0.0       # friction is applied per contact point (``_apply_plate_friction``)
         c.changeDynamics(self.plate_id, -1, lateralFriction=plate_friction,
                          restitution=plate_restitution, rollingFriction=0.0, spinningFriction=0.0)
         soft = ph.soft_contact(spec.total_mass)
@@ -288,10 +290,40 @@ class Physics:
     def step(self, n: int = 1) -> None:
         """Advance ``n`` physics steps (the runner adds controllers and trouble checks around them)."""
         step = self._client.stepSimulation
-        for _ in range(n):
-            step()
+        if self._physics.plate_friction_slip is None:
+            for _ in range(n):
+                step()
+        else:
+            for _ in range(n):
+                self._apply_plate_friction()
+                step()
         self._step_count += n
         self._state = None
+
+    def _apply_plate_friction(self) -> None:
+        """Apply ``plate_friction_slip``'s friction to every body-plate contact point of the last step.
+
+        Plain floats, not numpy: a few points per robot and step, where numpy's call overhead would dominate.
+        """
+        c, ph = self._client, self._physics
+        mu, slip = ph.friction_body_plate, float(ph.plate_friction_slip)   # type: ignore[arg-type]
+        moving: dict[int, tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...]]] = {}
+        for point in c.getContactPoints(bodyA=self.plate_id):
+            body, normal_force = point[2], point[9]
+            if point[4] != -1 or normal_force <= 0.0:
+                continue
+            if body not in moving:
+                linear, angular = c.getBaseVelocity(body)
+                moving[body] = (linear, angular, c.getBasePositionAndOrientation(body)[0])
+            (vx, vy, vz), (wx, wy, wz), (cx, cy, cz) = moving[body]
+            at = point[6]
+            nx, ny, nz = point[7]
+            rx, ry, rz = at[0] - cx, at[1] - cy, at[2] - cz
+            ux, uy, uz = vx + wy * rz - wz * ry, vy + wz * rx - wx * rz, vz + wx * ry - wy * rx
+            along = ux * nx + uy * ny + uz * nz
+            sx, sy, sz = ux - along * nx, uy - along * ny, uz - along * nz
+            scale = -mu * normal_force / max(math.sqrt(sx * sx + sy * sy + sz * sz), slip)
+            c.applyExternalForce(body, -1, (scale * sx, scale * sy, scale * sz), at, pybullet.WORLD_FRAME)
 
     def ticks_for(self, seconds: float) -> int:
         """Number of control ticks in ``seconds`` of sim time (rounded)."""

@@ -147,6 +147,17 @@ class PhysicsConfig:
     #: uneven arms"), not taken: a robot with one arm nine times heavier than the other is not the paper's
     #: robot. The roll / pitch and yaw factors above multiply the body's inertia of either model.
     mass_model: str = 'uniform'
+    #: Body-plate friction without static friction, as in the authors' smooth (SMC) Chrono contact. None
+    #: (the default): Bullet's Coulomb friction, which holds a body still under any sideways force below mu N.
+    #: A speed (m/s): Bullet's body-plate friction is off and every body-plate contact point gets a friction
+    #: force applied before each step, mu N_i v_i / max(|v_i|, plate_friction_slip) against its sliding
+    #: velocity v_i (N_i: its normal force of the step before), so below that speed friction is a viscous drag.
+    #: Chrono's Hertzian contact with the authors' values (E 2e7 Pa, nu 0.3, restitution 0.85, a 1e-4 s step,
+    #: its default 0.1 m curvature radius, four corner points under a 28-35 g robot) makes its tangential
+    #: force k_t v dt + g_t v below mu N, i.e. viscous up to about 7 mm/s. A diagnostic of whether the
+    #: authors' in-phase pairs glide because their plate has no static friction (docs/sim_calibration.md,
+    #: "A plate without static friction"); not taken.
+    plate_friction_slip: float | None = None
     #: The arms' ends in plan view. 'square': the authors' box arms (5.0 x 0.3 x 2.3 cm). 'round': the same
     #: box with both vertical end edges rounded to the arm's half thickness (a stadium in plan view: a box
     #: of length L - t between two vertical cylinders of diameter t, same length, height, mass and
@@ -186,7 +197,7 @@ class PhysicsConfig:
                 raise ConfigError(f'PhysicsConfig.{name} must be an integer >= 1, got {value!r}')
         if self.friction_arm_arm is not None:
             require_positive(self, 'friction_arm_arm', error=ConfigError)
-        for name in ('servo_bandwidth', 'contact_stiffness', 'solver_residual_threshold'):
+        for name in ('servo_bandwidth', 'contact_stiffness', 'solver_residual_threshold', 'plate_friction_slip'):
             if getattr(self, name) is not None:
                 require_positive(self, name, error=ConfigError)
         for name in ('restitution_velocity_threshold', 'restitution_body_plate'):
@@ -380,6 +391,16 @@ class SimConfig:
         ph, spec = self.physics, self.robot
         small_sized = (spec.body_width, spec.body_depth, spec.arm_length) == (SMALL.body_width, SMALL.body_depth,
                                                                               SMALL.arm_length)
+        if ph.plate_friction_slip is not None:
+            if self.noise.friction_sd > 0.0:
+                raise ConfigError('PhysicsConfig.plate_friction_slip: the applied plate friction has no friction '
+                                  'field; set NoiseConfig.friction_sd to 0')
+            drag_per_step = ph.friction_body_plate * ph.gravity * ph.time_step / ph.plate_friction_slip
+            if drag_per_step > 1.0:
+                warnings.warn(f'PhysicsConfig.plate_friction_slip: {ph.plate_friction_slip:g} m/s at a '
+                              f'{ph.time_step:.6g} s step takes {drag_per_step:.2f} of a sliding speed in one step '
+                              f'(explicit drag; above 1 it overshoots): use a larger slip speed or a finer step',
+                              NotConvergedWarning, stacklevel=3)
         if ph.mass_model == 'authors' and not small_sized:
             raise ConfigError("PhysicsConfig.mass_model 'authors' is the authors' Chrono model of the paper's small "
                               'robot; use it with the small preset')

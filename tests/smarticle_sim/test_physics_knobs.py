@@ -6,6 +6,7 @@ import math
 import warnings
 
 import numpy as np
+import pybullet
 import pytest
 
 from smarticle_common.gait import GaitConfig
@@ -201,3 +202,40 @@ def test_mass_model_refused_where_it_means_nothing(config: SimConfig) -> None:
         PhysicsConfig(mass_model='measured')
     with pytest.raises(ConfigError, match="mass_model 'authors'"):
         SimConfig.from_preset('feedback', mass_model='authors')
+
+
+def creep(config: SimConfig, push: float, seconds: float = 0.5) -> tuple[float, float]:
+    """A lone robot (arms still) pushed sideways by ``push`` x its weight x the plate's mu: how far it went (m),
+    and Bullet's body-plate friction coefficient in that world."""
+    from smarticle_sim.physics import Physics
+    with Physics(config, lone_robot()) as world:
+        world.step(world.ticks_for(0.2) * world.steps_per_tick)           # settle on the plate
+        start = world.body_xy()[0].copy()
+        force = push * config.physics.friction_body_plate * config.robot.total_mass * config.physics.gravity
+        for _ in range(round(seconds / config.physics.time_step)):
+            world.client.applyExternalForce(world.body_ids[0], -1, (force, 0.0, 0.0), (0.0, 0.0, 0.0),
+                                            pybullet.LINK_FRAME)
+            world.step(1)
+        return float(np.linalg.norm(world.body_xy()[0] - start)), world.plate_friction(0)
+
+
+def test_a_plate_without_static_friction_lets_a_small_push_creep(config: SimConfig) -> None:
+    """``plate_friction_slip``: a push of 0.3 mu m g holds still on Coulomb's plate and creeps on the regularised one
+    at about 0.3 of the slip speed (viscous below it); a push above mu m g slides on both."""
+    held, mu = creep(config, 0.3)
+    assert held < 1e-4 and mu == pytest.approx(0.3)
+    slip = 0.02
+    regularised = config.with_physics(plate_friction_slip=slip)
+    crept, bullet_mu = creep(regularised, 0.3)
+    assert bullet_mu == 0.0                                                 # Bullet's own friction is off there
+    assert crept == pytest.approx(0.3 * slip * 0.5, rel=0.25)               # v = push x slip, for 0.5 s
+    assert creep(config, 1.5)[0] > 0.01 and creep(regularised, 1.5)[0] > 0.01
+
+
+def test_plate_friction_slip_refused_or_warned() -> None:
+    with pytest.raises(ConfigError, match='plate_friction_slip'):
+        PhysicsConfig(plate_friction_slip=0.0)
+    with pytest.raises(ConfigError, match='plate_friction_slip'):
+        SimConfig().with_physics(plate_friction_slip=0.01).with_noise(friction_sd=0.06)
+    with pytest.warns(NotConvergedWarning, match='plate_friction_slip'):
+        SimConfig().with_physics(plate_friction_slip=0.001)
