@@ -211,8 +211,10 @@ def _pair(p: Mapping[str, Any], seed: int, mujoco: bool) -> dict[str, Any]:
     r, theta, phi = pair_start(p, seed)
     start = {'r0_bl': r, 'theta0_deg': theta, 'phi0_deg': phi}
     try:
+        delta = float(p['alpha2_delta_deg'])
         scene = pair_scene(config.robot, gait, r, math.radians(theta), math.radians(phi),
-                           (0.0, float(p['phase2'])), seed=seed)
+                           (0.0, float(p['phase2'])), seed=seed,
+                           alpha_max2=gait.alpha_max + math.radians(delta) if delta else None)
     except SceneError as exc:
         return {**start, 'admissible': False, 'why': str(exc), 'trouble': '', 'gliders': []}
     per = max(1, round(gait.period / (config.physics.control_tick * int(p['sample_every']))))
@@ -351,11 +353,12 @@ KINDS: dict[str, TrialKind] = {
                        'N robots densely packed (P1, P2, P3)'),
     'pair': TrialKind(pair_trial, {**_COMMON, **_GLIDERS, 'periods': 75.0, 'r_bl': 1.3, 'theta_deg': 0.0,
                                    'phi_deg': 180.0, 'phase2': 0.0, 'start_jitter': [0.0, 0.0, 0.0],
-                                   'sample_every': 2, 'min_periods': 10, 'bound_tail': 5},
+                                   'sample_every': 2, 'min_periods': 10, 'bound_tail': 5, 'alpha2_delta_deg': 0.0},
                       'two robots from pair coordinates (P4 basin scan, P5 alpha_max sweep)'),
     'pair_mujoco': TrialKind(pair_mujoco_trial, {**_COMMON, **_GLIDERS, 'periods': 75.0, 'r_bl': 1.3, 'theta_deg': 0.0,
                                                  'phi_deg': 180.0, 'phase2': 0.0, 'start_jitter': [0.0, 0.0, 0.0],
-                                                 'sample_every': 2, 'min_periods': 10, 'bound_tail': 5, 'mujoco': {}},
+                                                 'sample_every': 2, 'min_periods': 10, 'bound_tail': 5, 'mujoco': {},
+                                                 'alpha2_delta_deg': 0.0},
                              'the pair kind stepped by MuJoCo (cross-engine check; smarticle_sim.mujoco_engine)'),
     'single': TrialKind(single_trial, {**_COMMON, 'periods': 20.0, 'sample_every': 1},
                         'one robot alone, drift per cycle (P7)'),

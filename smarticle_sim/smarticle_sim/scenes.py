@@ -173,21 +173,23 @@ def dense_scene(spec: RobotSpec, gait: GaitConfig, n: int = 7, seed: int = 0,
 
 def pair_scene(spec: RobotSpec, gait: GaitConfig, r: float, theta: float, phi: float,
                phases: tuple[float, float] = (0.0, 0.0), heading1: float = math.pi / 2.0,
-               centre: tuple[float, float] = (0.0, 0.0), seed: int | None = None) -> Scene:
+               centre: tuple[float, float] = (0.0, 0.0), seed: int | None = None,
+               alpha_max2: float | None = None) -> Scene:
     """Two robots at pair coordinates (r in BL, theta, phi in rad) with gait phases ``phases``.
 
     Robot 1 sits at ``centre`` with normal ``heading1``; robot 2's centre is r BL away in the direction
     theta counter-clockwise from robot 1's body x axis (theta = pi/2: straight ahead along its normal),
     and its normal is robot 1's turned by phi. Nothing here is random; ``seed`` is the trial's seed the
     scene carries, from which the noise with a cause draws (``NoiseConfig.trial_seed``).
-    Raises SceneError if the two overlap in their starting shapes.
+    ``alpha_max2`` (rad) gives robot 2 its own amplitude (default: the gait's), two robots whose servos
+    turn their arms unequally far. Raises SceneError if the two overlap in their starting shapes.
     """
     if not (math.isfinite(r) and r > 0.0):
         raise SceneError(f'pair separation r must be > 0 body lengths, got {r!r}')
     pose1 = (centre[0], centre[1], heading1)
     pose2 = place_pair(pose1, r * spec.body_length, theta, phi)
     g1 = GaitConfig(gait.alpha_max, gait.period, gait.servo_speed, phases[0])
-    g2 = GaitConfig(gait.alpha_max, gait.period, gait.servo_speed, phases[1])
+    g2 = GaitConfig(gait.alpha_max if alpha_max2 is None else alpha_max2, gait.period, gait.servo_speed, phases[1])
     scene = Scene((_placement(*pose1, g1), _placement(*pose2, g2)), name='pair', seed=seed)
     scene.validate(spec, math.inf)
     return scene

@@ -136,3 +136,13 @@ def test_a_restored_scene_may_overlap_by_its_tolerance_and_no_more() -> None:
     for bad in (-0.001, 0.05, math.nan):
         with pytest.raises(SceneError, match='overlap_tolerance'):
             state_scene(pair(0.001), [None, None], overlap_tolerance=bad)
+
+
+def test_pair_scene_gives_robot_two_its_own_amplitude(gait90: GaitConfig) -> None:
+    """``alpha_max2``: robot 2's gait (and so its start shape) has its own amplitude; robot 1 keeps the gait's."""
+    scene = pair_scene(SMALL, gait90, 1.6, math.radians(270), math.radians(180), alpha_max2=math.radians(85))
+    first, second = scene.robots
+    assert first.gait is not None and second.gait is not None
+    assert first.gait.alpha_max == gait90.alpha_max and second.gait.alpha_max == pytest.approx(math.radians(85))
+    assert (second.alpha1, second.alpha2) == pytest.approx((math.radians(85), math.radians(85)))
+    assert (first.alpha1, first.alpha2) == pytest.approx((gait90.alpha_max, gait90.alpha_max))
