@@ -211,10 +211,9 @@ def _pair(p: Mapping[str, Any], seed: int, mujoco: bool) -> dict[str, Any]:
     r, theta, phi = pair_start(p, seed)
     start = {'r0_bl': r, 'theta0_deg': theta, 'phi0_deg': phi}
     try:
-        delta = float(p['alpha2_delta_deg'])
         scene = pair_scene(config.robot, gait, r, math.radians(theta), math.radians(phi),
                            (0.0, float(p['phase2'])), seed=seed,
-                           alpha_max2=gait.alpha_max + math.radians(delta) if delta else None)
+                           alpha_max2=gait.alpha_max + math.radians(float(p['alpha2_delta_deg'])))
     except SceneError as exc:
         return {**start, 'admissible': False, 'why': str(exc), 'trouble': '', 'gliders': []}
     per = max(1, round(gait.period / (config.physics.control_tick * int(p['sample_every']))))
@@ -347,18 +346,17 @@ _COMMON: dict[str, Any] = {'preset': 'small', 'physics': {}, 'robot': {}, 'perio
 _GLIDERS: dict[str, Any] = {'min_periods': 30, 'r_bind_bl': 1.6, 'isolation_w': 2.0, 'positive_periods': 100,
                             'trajectory': True}
 
+#: The pair kinds' parameters (Bullet's and MuJoCo's take the same).
+_PAIR: dict[str, Any] = {**_COMMON, **_GLIDERS, 'periods': 75.0, 'r_bl': 1.3, 'theta_deg': 0.0, 'phi_deg': 180.0,
+                         'phase2': 0.0, 'start_jitter': [0.0, 0.0, 0.0], 'sample_every': 2, 'min_periods': 10,
+                         'bound_tail': 5, 'alpha2_delta_deg': 0.0}
+
 KINDS: dict[str, TrialKind] = {
     'dense': TrialKind(dense_trial, {**_COMMON, **_GLIDERS, 'robots': 7, 'phase_jitter': 0.0, 'sample_every': 4,
                                      'contacts': False},
                        'N robots densely packed (P1, P2, P3)'),
-    'pair': TrialKind(pair_trial, {**_COMMON, **_GLIDERS, 'periods': 75.0, 'r_bl': 1.3, 'theta_deg': 0.0,
-                                   'phi_deg': 180.0, 'phase2': 0.0, 'start_jitter': [0.0, 0.0, 0.0],
-                                   'sample_every': 2, 'min_periods': 10, 'bound_tail': 5, 'alpha2_delta_deg': 0.0},
-                      'two robots from pair coordinates (P4 basin scan, P5 alpha_max sweep)'),
-    'pair_mujoco': TrialKind(pair_mujoco_trial, {**_COMMON, **_GLIDERS, 'periods': 75.0, 'r_bl': 1.3, 'theta_deg': 0.0,
-                                                 'phi_deg': 180.0, 'phase2': 0.0, 'start_jitter': [0.0, 0.0, 0.0],
-                                                 'sample_every': 2, 'min_periods': 10, 'bound_tail': 5, 'mujoco': {},
-                                                 'alpha2_delta_deg': 0.0},
+    'pair': TrialKind(pair_trial, _PAIR, 'two robots from pair coordinates (P4 basin scan, P5 alpha_max sweep)'),
+    'pair_mujoco': TrialKind(pair_mujoco_trial, {**_PAIR, 'mujoco': {}},
                              'the pair kind stepped by MuJoCo (cross-engine check; smarticle_sim.mujoco_engine)'),
     'single': TrialKind(single_trial, {**_COMMON, 'periods': 20.0, 'sample_every': 1},
                         'one robot alone, drift per cycle (P7)'),

@@ -143,7 +143,7 @@ def run_mujoco(config: SimConfig, scene: Scene, periods: float, sample_every: in
     data = mujoco.MjData(model)
     n = len(scene.robots)
     qpos = [model.jnt_qposadr[model.joint(f'robot{k}_arm{j}').id] for k in range(n) for j in (0, 1)]
-    free = [model.jnt_qposadr[model.body_jntadr[model.body(f'robot{k}').id]] for k in range(n)]
+    free = np.array([model.jnt_qposadr[model.body_jntadr[model.body(f'robot{k}').id]] for k in range(n)])
     owner = np.full(model.ngeom, -1)
     for g in range(model.ngeom):
         name = model.body(model.geom_bodyid[g]).name
@@ -194,13 +194,12 @@ def run_mujoco(config: SimConfig, scene: Scene, periods: float, sample_every: in
                 if robots.any():
                     seen[a[robots], b[robots]] = seen[b[robots], a[robots]] = True
                     peak_overlap = max(peak_overlap, -float(data.contact.dist[robots].min()))
-        quats = np.array([data.qpos[f + 3:f + 7] for f in free])           # MuJoCo: w, x, y, z
-        heading, tilt = body_headings_and_tilts(quats[:, [1, 2, 3, 0]])
+        quats = data.qpos[free[:, None] + [4, 5, 6, 3]]      # MuJoCo keeps w, x, y, z; Bullet's order is x, y, z, w
+        heading, tilt = body_headings_and_tilts(quats)
         times[s] = data.time
-        poses[s, :, 0] = [data.qpos[f] for f in free]
-        poses[s, :, 1] = [data.qpos[f + 1] for f in free]
+        poses[s, :, :2] = data.qpos[free[:, None] + [0, 1]]
         poses[s, :, 2] = heading
-        arms[s] = np.array([data.qpos[q] for q in qpos]).reshape(n, 2)
+        arms[s] = data.qpos[qpos].reshape(n, 2)
         touching[s], seen[:] = seen, False
         taken = s + 1
         peak_tilt = max(peak_tilt, float(tilt.max()))

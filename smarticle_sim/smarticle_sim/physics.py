@@ -573,7 +573,7 @@ def box_inertia(mass: float, size_x: float, size_y: float, size_z: float) -> tup
             mass * (size_x ** 2 + size_y ** 2) / 12.0)
 
 
-def arm_masses(spec: RobotSpec, mass_model: str = 'uniform') -> tuple[float, float]:
+def arm_masses(spec: RobotSpec, mass_model: str) -> tuple[float, float]:
     """The masses (kg) of arm 1 and arm 2 (joints 0 and 1) under ``PhysicsConfig.mass_model``."""
     if mass_model == 'authors':
         return AUTHORS_ARM_MASS, AUTHORS_LINK_DENSITY * spec.arm_length * spec.arm_thickness * spec.arm_height
@@ -588,8 +588,8 @@ def authors_inertias(spec: RobotSpec) -> tuple[tuple[float, float, float], ...]:
     """
     body = (spec.body_width, spec.body_depth, spec.body_height)
     arm = (spec.arm_length, spec.arm_thickness, spec.arm_height)
-    return (box_inertia(AUTHORS_LINK_DENSITY * math.prod(body), *body),
-            *(box_inertia(AUTHORS_LINK_DENSITY * math.prod(arm), *arm),) * 2)
+    arm_inertia = box_inertia(AUTHORS_LINK_DENSITY * math.prod(arm), *arm)
+    return box_inertia(AUTHORS_LINK_DENSITY * math.prod(body), *body), arm_inertia, arm_inertia
 
 
 def robot_link_contact(physics: PhysicsConfig, robot_mass: float) -> dict[str, float]:

@@ -389,8 +389,6 @@ class SimConfig:
     def __post_init__(self) -> None:
         """Refuse settings that cannot converge for this robot; warn about ones that converge poorly."""
         ph, spec = self.physics, self.robot
-        small_sized = (spec.body_width, spec.body_depth, spec.arm_length) == (SMALL.body_width, SMALL.body_depth,
-                                                                              SMALL.arm_length)
         if ph.plate_friction_slip is not None:
             if self.noise.friction_sd > 0.0:
                 raise ConfigError('PhysicsConfig.plate_friction_slip: the applied plate friction has no friction '
@@ -401,7 +399,8 @@ class SimConfig:
                               f'{ph.time_step:.6g} s step takes {drag_per_step:.2f} of a sliding speed in one step '
                               f'(explicit drag; above 1 it overshoots): use a larger slip speed or a finer step',
                               NotConvergedWarning, stacklevel=3)
-        if ph.mass_model == 'authors' and not small_sized:
+        if ph.mass_model == 'authors' and ((spec.body_width, spec.body_depth, spec.arm_length)
+                                           != (SMALL.body_width, SMALL.body_depth, SMALL.arm_length)):
             raise ConfigError("PhysicsConfig.mass_model 'authors' is the authors' Chrono model of the paper's small "
                               'robot; use it with the small preset')
         tip_travel = spec.servo_speed * spec.arm_length * ph.time_step     # arm tip per step at top speed
