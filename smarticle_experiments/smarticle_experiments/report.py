@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from smarticle_sim.mujoco_engine import MujocoSettings
 from smarticle_sim.settings import BULLET_SOLVER_RESIDUAL_THRESHOLD
 
 from .spec import ExperimentSpec, Trial, seed_runs
@@ -501,6 +502,9 @@ def setting_cells(setting: tuple[tuple[str, Any], ...], keys: Sequence[str]) -> 
     return ''.join(f'{values.get(k, "")} | ' for k in keys)
 
 
+#: The trial kinds stepped by MuJoCo (their step is ``MujocoSettings.time_step``; no Bullet solver).
+MUJOCO_KINDS = frozenset({'pair_mujoco', 'single_mujoco'})
+
 #: ``step_convergence``: a figure counts as converged at a step if it is within this fraction of its value at
 #: the finest step of the spec, or within the two values' combined 95 % half-widths (issue #11, item 1).
 CONVERGED_WITHIN = 0.10
@@ -518,16 +522,22 @@ def section_step_convergence(ctx: Context) -> list[str]:
     # so the last is the reference; a variant = the trial's other grid values
     Setting = tuple[float, int, float]
     Variant = tuple[tuple[str, Any], ...]
-    solver_keys = ('physics.time_step', 'physics.solver_iterations', 'physics.solver_residual_threshold')
+    # MuJoCo's trials (``MUJOCO_KINDS``) have their own step and no Bullet solver: iterations and threshold 0
+    solver_keys = ('physics.time_step', 'physics.solver_iterations', 'physics.solver_residual_threshold',
+                   'mujoco.time_step')
     by_setting: dict[tuple[Variant, Setting], list[dict[str, Any]]] = defaultdict(list)
     trials_at: dict[tuple[Variant, Setting], int] = defaultdict(int)
     for t, r in ctx.ok():
-        ph = config_of(t.params).physics
-        threshold = ph.solver_residual_threshold
-        if threshold is None:
-            threshold = BULLET_SOLVER_RESIDUAL_THRESHOLD
+        if t.kind in MUJOCO_KINDS:
+            setting: Setting = (MujocoSettings(**dict(t.params.get('mujoco') or {})).time_step, 0, 0.0)
+        else:
+            ph = config_of(t.params).physics
+            threshold = ph.solver_residual_threshold
+            if threshold is None:
+                threshold = BULLET_SOLVER_RESIDUAL_THRESHOLD
+            setting = (ph.time_step, ph.solver_iterations, threshold)
         variant = other_grid_values(t.point, solver_keys)
-        key = (variant, (ph.time_step, ph.solver_iterations, threshold))
+        key = (variant, setting)
         trials_at[key] += 1
         longest = max(r.get('gliders') or [], key=lambda g: g['lifetime_periods'], default=None)
         if longest is not None:
@@ -566,7 +576,8 @@ def section_step_convergence(ctx: Context) -> list[str]:
             v_off, v_ok = off('travel', key, finest)
             both = None if r_ok is None or v_ok is None else (r_ok and v_ok)
             lines.append('| ' + setting_cells(variant, columns)
-                         + f'1/{1.0 / setting[0]:.0f} s | {setting[1]} | {setting[2]:.0e} | '
+                         + f'1/{1.0 / setting[0]:.0f} s | {setting[1] or "- (MuJoCo)"} | '
+                         f'{f"{setting[2]:.0e}" if setting[1] else "-"} | '
                          f'{len(by_setting.get(key, []))}/{trials_at[key]} | {figures["r"][key].text(".3f")} | '
                          f'{r_off} | {figures["travel"][key].text(".2f")} | {v_off} | '
                          f'{_yes_no(both) if key != finest else "(reference)"} |')
@@ -577,8 +588,8 @@ def section_step_convergence(ctx: Context) -> list[str]:
                 ests = [figures[name][(variant, s)] for s in same]
                 err = np.array([[e.value - e.low if math.isfinite(e.low) else 0.0 for e in ests],
                                 [e.high - e.value if math.isfinite(e.high) else 0.0 for e in ests]])
-                residual = '' if solver[1] == BULLET_SOLVER_RESIDUAL_THRESHOLD else f', residual {solver[1]:.0e}'
-                label = f'{solver[0]} solver iterations{residual}'
+                residual = '' if solver[1] in (BULLET_SOLVER_RESIDUAL_THRESHOLD, 0.0) else f', residual {solver[1]:.0e}'
+                label = f'{solver[0]} solver iterations{residual}' if solver[0] else 'MuJoCo'
                 ax.errorbar([1.0 / s[0] for s in same], [e.value for e in ests], yerr=err, fmt='o-', capsize=3,
                             label=f'{prefix}: {label}' if prefix else label)
     for ax, label in zip(axes, ('glider mean r (BL)', 'travel per 100 periods (W)'), strict=True):

@@ -311,3 +311,23 @@ def test_pair_paths_show_which_setting_makes_pairs_travel(tmp_path: Path) -> Non
     assert '| 3 | 3.00 [3.00, 3.00] | 3.00, 3.00, 3.00 |' in rows['0.1']
     assert '| 3 | 0.00 [0.00, 0.00] | 0.00, 0.00, 0.00 | 1.50, 1.50, 1.50 | 180.0, 180.0, 180.0 |' in rows['0.0']
     assert (tmp_path / 'paths' / 'report-paths' / 'pair_paths.png').stat().st_size > 0
+
+
+def test_step_convergence_reads_a_mujoco_trial_s_own_step(tmp_path: Path) -> None:
+    """The MuJoCo kinds are stepped at ``MujocoSettings.time_step`` with no Bullet solver: their rows give
+    that step (the finest the reference), not the Bullet physics' step and iterations the spec also carries."""
+    spec = spec_from_mapping({'name': 'mj', 'kind': 'pair_mujoco', 'seeds': 2, 'report': ['step_convergence'],
+                              'grid': {'mujoco.time_step': [1 / 4800, 1 / 9600]}})
+    trials = spec.trials(CODE)
+    store = ResultStore(tmp_path / 'mj')
+    travel = {1 / 4800: 5.8, 1 / 9600: 1.5}
+    for t in trials:
+        g = {**glider(100, 'C1', 180.0), 'r_bl': 1.50,
+             'v_com_w_per_period': travel[t.params['mujoco']['time_step']] / 100.0}
+        store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': dict(t.point), 'status': 'ok',
+                     'result': {'trouble': '', 'gliders': [g]}})
+    report = write_report(spec, trials, store, CODE).read_text()
+    rows = [line for line in report.splitlines() if line.startswith('| 1/')]
+    assert [row.split(' | ')[0] for row in rows] == ['| 1/4800 s', '| 1/9600 s']
+    assert all(' | - (MuJoCo) | - | ' in row for row in rows)
+    assert rows[0].endswith('| no |') and rows[1].endswith('| (reference) |')
