@@ -33,7 +33,7 @@ from smarticle_sim.settings import BULLET_SOLVER_RESIDUAL_THRESHOLD
 from .spec import ExperimentSpec, Trial, seed_runs
 from .stats import Estimate, bootstrap_mean, kaplan_meier, logrank, wilson
 from .store import ResultStore, write_atomic
-from .trials import config_of, ensemble_msd, msd_beta
+from .trials import MUJOCO_KINDS, config_of, ensemble_msd, msd_beta
 
 
 @dataclass
@@ -501,9 +501,6 @@ def setting_cells(setting: tuple[tuple[str, Any], ...], keys: Sequence[str]) -> 
     values = dict(setting)
     return ''.join(f'{values.get(k, "")} | ' for k in keys)
 
-
-#: The trial kinds stepped by MuJoCo (their step is ``MujocoSettings.time_step``; no Bullet solver).
-MUJOCO_KINDS = frozenset({'pair_mujoco', 'single_mujoco'})
 
 #: ``step_convergence``: a figure counts as converged at a step if it is within this fraction of its value at
 #: the finest step of the spec, or within the two values' combined 95 % half-widths (issue #11, item 1).

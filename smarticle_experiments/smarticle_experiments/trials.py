@@ -42,6 +42,9 @@ PHYSICS_FIELDS: frozenset[str] = frozenset(f.name for f in fields(PhysicsConfig)
 ROBOT_FIELDS: frozenset[str] = frozenset(f.name for f in fields(RobotSpec)) - {'name'}
 #: NoiseConfig field names a spec may set (``noise:`` mapping; unset fields are off, ``NoiseConfig.none()``).
 NOISE_FIELDS: frozenset[str] = frozenset(f.name for f in fields(NoiseConfig))
+#: The trial kinds stepped by MuJoCo (``smarticle_sim.mujoco_engine``) instead of Bullet.
+MUJOCO_KINDS: frozenset[str] = frozenset({'pair_mujoco', 'single_mujoco'})
+
 #: MujocoSettings field names the MuJoCo kinds take (``params: {mujoco: {...}}`` or grid keys ``mujoco.X``).
 MUJOCO_FIELDS: frozenset[str] = frozenset(f.name for f in fields(MujocoSettings))
 
@@ -411,7 +414,7 @@ def validate_params(kind: str, params: Mapping[str, Any]) -> None:
             replace(NoiseConfig.none(), **noise_mapping(params.get('noise')))
             return
         config = config_of(params)
-        if kind in ('pair_mujoco', 'single_mujoco'):
+        if kind in MUJOCO_KINDS:
             try:
                 MujocoSettings(**dict(params.get('mujoco') or {}))
             except SimError as exc:

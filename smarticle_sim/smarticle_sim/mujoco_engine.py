@@ -164,7 +164,7 @@ def build_model(config: SimConfig, scene: Scene, settings: MujocoSettings) -> mu
     w, d, h = spec.body_width, spec.body_depth, spec.body_height
     half_l, half_t, half_h = spec.arm_length / 2.0, spec.arm_thickness / 2.0, spec.arm_height / 2.0
     arm_z = spec.arm_clearance + spec.arm_height / 2.0 - h / 2.0
-    bodies, excludes, actuators = [], [], []
+    bodies, contact_items, actuators = [], [], []
     hertz = settings.robot_contact == 'hertz'
     # 'hertz': robot-robot contacts are found (overlap < 0 margin) but all inside the gap, so MuJoCo's solver
     # leaves them to ``hertz_contact_forces``; the plate is in another collision class (explicit pairs)
@@ -187,11 +187,11 @@ def build_model(config: SimConfig, scene: Scene, settings: MujocoSettings) -> mu
             f'<geom name="robot{k}_body" type="box" size="{w / 2.0!r} {d / 2.0!r} {h / 2.0!r}" '
             f'mass="{spec.body_mass!r}" friction="{ph.friction_robot_robot!r} 0 0"{robot_geom}/>'
             f'{"".join(arms)}</body>')
-        excludes.append(f'<exclude body1="robot{k}_link0" body2="robot{k}_link1"/>')
+        contact_items.append(f'<exclude body1="robot{k}_link0" body2="robot{k}_link1"/>')
         if hertz:   # the plate's contacts, MuJoCo's own: explicit pairs (the plate is out of the robots' filter)
             plate_friction = max(ph.friction_body_plate, ph.friction_robot_robot)   # MuJoCo's rule, as without
             for geom in (f'robot{k}_body', f'robot{k}_arm0_geom', f'robot{k}_arm1_geom'):
-                excludes.append(f'<pair geom1="plate" geom2="{geom}" condim="3" margin="0" gap="0" '
+                contact_items.append(f'<pair geom1="plate" geom2="{geom}" condim="3" margin="0" gap="0" '
                                 f'friction="{plate_friction!r} {plate_friction!r} 0 0 0" '
                                 f'solref="{settings.contact_timeconst!r} {settings.contact_dampratio!r}"/>')
     half_plate = ph.plate_size / 2.0
@@ -202,7 +202,7 @@ def build_model(config: SimConfig, scene: Scene, settings: MujocoSettings) -> mu
            f'</default><worldbody>'
            f'<geom name="plate" type="plane" size="{half_plate!r} {half_plate!r} 0.1" '
            f'friction="{ph.friction_body_plate!r} 0 0"{plate_class}/>'
-           f'{"".join(bodies)}</worldbody><contact>{"".join(excludes)}</contact>'
+           f'{"".join(bodies)}</worldbody><contact>{"".join(contact_items)}</contact>'
            f'<actuator>{"".join(actuators)}</actuator></mujoco>')
     return mujoco.MjModel.from_xml_string(xml)
 
