@@ -28,7 +28,10 @@ def test_an_fsr_impact_holds_the_emulated_servos_until_the_next_period(nodes: An
         t0 = rig.start(1.0)
         # during period 2's first quarter arm 1 strokes from +45 to -45 degrees (0.15 s of a 0.2 s quarter)
         spin_until(probe, lambda: time.time() >= rig.period_start(2) + 0.04, 10.0)
-        rig.pulse('arm1_front', 11.0)               # inside the shipped window [7.37, 15.07] N
+        # inside the shipped window [7.37, 15.07] N; held 80 ms (8 of the bridge's 10 ms reads), not 30: with the
+        # whole suite running, the bridge process can stall past a 30 ms press and never read it. One halt per
+        # period, so the longer press still halts once, mid-stroke (period 2 + 0.04-0.12 s)
+        rig.pulse('arm1_front', 11.0, duration=0.08)
         assert spin_until(probe, lambda: len(rig.observed.halts) >= 1, 5.0), logs()
         spin_until(probe, lambda: time.time() >= rig.period_start(3) + 0.1, 10.0)
 
