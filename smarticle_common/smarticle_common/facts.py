@@ -107,7 +107,7 @@ SMALL = RobotSpec(name='small', body_width=0.054, body_depth=0.022, body_height=
 
 #: The larger FSR robot of the paper's Fig. 5(a): measured there are its mass (175 g), arms (6.0 cm long,
 #: 0.7 cm thick), body (6.5 cm wide, 3.5 cm deep) and FSRs on all four arm faces. Assumed, each named in
-#: ``FEEDBACK_ASSUMED`` (docs/feedback.md, "The feedback robot as built", has the sensitivity table):
+#: ``FEEDBACK_ASSUMED`` (docs/feedback.md, "The feedback robot as built"; sensitivity: docs/history/feedback.md):
 #: the heights (body 4.0 cm, arms 3.4 cm with 3 mm clearance: the small robot's proportions, arms ~85 % of
 #: the body height); the arm mass (20 g each, servo horn + arm + FSRs, body 135 g with two servos and
 #: the board); the servo speed (``FEEDBACK_SERVO_SPEED``, a hobby-servo rating of 0.1 s / 60 deg); the

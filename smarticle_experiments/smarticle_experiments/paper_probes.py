@@ -1,8 +1,8 @@
 """Calibration of the sim against the paper (SPEC section 6): P7 drift, pair binding/transport, P1 sample.
 
-The exploratory probes of the calibration passes (docs/sim_calibration_history.md); the paper experiments proper
-run as specs through ``smarticle-experiments``. Every experiment is seeded and deterministic; trials run
-in parallel (``--procs``, at most 2 here).
+The exploratory probes of the calibration passes (docs/history/sim_calibration_first_passes.md); the paper
+experiments proper run as specs through ``smarticle-experiments``. Every experiment is seeded and
+deterministic; trials run in parallel (``--procs``, at most 2 here).
 Tables are printed; each experiment appends rows to ``out/calibration/<experiment>.csv`` and draws
 ``out/calibration/<experiment>.png``. Run from the repository root, e.g.::
 

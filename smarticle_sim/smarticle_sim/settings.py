@@ -27,10 +27,10 @@ AUTHORS_LINK_DENSITY = 100.0          # kg/m^3
 AUTHORS_ARM_MASS = 0.00319
 
 
-#: Soft contacts (``PhysicsConfig.contact_stiffness``): the largest contact-spring angle per step (omega x
-#: time_step, omega = sqrt(k / (m / 2)) of one contact point) before Bullet's implicit integration takes
-#: about 10 % of the rebound. Measured: an undamped contact rebounds with 0.90 at 0.035 rad per step,
-#: 0.77-0.79 at 0.08-0.09, 0.43 at 0.35 (docs/sim_calibration.md, "Soft contacts").
+#: Soft contacts (``PhysicsConfig.contact_stiffness``): the largest contact-spring angle per step (rad; omega
+#: x time_step, omega = sqrt(k / (m / 2)) of one contact point) before Bullet's implicit integration takes
+#: about 10 % of the rebound (the measured rebound against the angle: docs/calibration/paper_figures.md,
+#: "Soft contacts").
 SOFT_CONTACT_MAX_OMEGA_DT = 0.03
 #: Bullet's own solver residual threshold (PyBullet's physics server sets it), what
 #: ``PhysicsConfig.solver_residual_threshold`` None leaves in place.
@@ -48,31 +48,26 @@ class PhysicsConfig:
     The defaults are the converged, stable model of docs/sim_calibration.md: the paper authors' contact
     values (friction 0.3 on every pair, impacts between robots rebounding with 0.85 and none on the plate), a servo
     of fixed bandwidth, the robots' own masses and inertias, at the coarsest step and the fewest solver
-    iterations at which every observable was within 10 % of its limit with x100 roll / pitch inertia
-    (1/960 s, 10 iterations); with the robots' own inertia a bound pair's travel is 10.5 % above its
-    finest-step value (a narrow miss). Each value that departs from a measured or published one says why
-    below, with the figure behind it.
+    iterations at which the observables converge (1/960 s, 10 iterations; where each is against its
+    time-step limit, and what misses: docs/sim_calibration.md, the claims table). Each value that departs
+    from a measured or published one says why below; the figures behind it are in the docs.
     """
 
-    #: 1/960 s: the coarsest step at which the dense statistics converge. The C1 share of P1's gliders is
-    #: 45-49 % at 1/480 s, 24.4-26.5 % at 1/960 s and 27-30 % at 1/1920 s on the same seeds (at contact ERP
-    #: 0.6, x100 inertia); the single-robot drift is within 10 % of its limit from 1/480 s on
-    #: (docs/sim_calibration.md, Convergence).
+    #: Physics step (s). 1/960 s: the coarsest step at which the dense statistics (the C1 / C2 mix of P1's
+    #: gliders) converge; the single-robot drift is within 10 % of its limit
+    #: (docs/calibration/numerics.md, Convergence).
     time_step: float = 1.0 / 960.0
     control_tick: float = 1.0 / 60.0            # must be a whole number of time steps
-    #: 10 at 1/960 s: the fewest with which every observable was within 10 % of its limit at x100 roll /
-    #: pitch inertia. With 5-8 a bound pair glides 19-28 % too fast (10: +5 %, 20: -6 % against 1/3840 s,
-    #: at x100; with the robots' own inertia 10 give +10.5 %: a narrow miss); the drift is 7.7-8.7 % off its
-    #: limit at every heading (5: 11 % at 0 deg). It costs a P1 trial 1.2-1.4x the 5 iterations of the previous
-    #: default (docs/sim_calibration.md, Convergence and Speed). Stopping the solver early by its residual
-    #: (``solver_residual_threshold``) was measured and not taken: it leaves the drift 13-14 % off at 0 deg.
+    #: Contact solver sweeps per step. 10 at 1/960 s: the fewest with which a bound pair's travel and the
+    #: drift at every heading converge; fewer let the pair glide too fast (docs/calibration/numerics.md,
+    #: "The default's solver" and Speed). Stopping the solver early by its residual
+    #: (``solver_residual_threshold``) was measured and not taken: it leaves the drift off its limit.
     solver_iterations: int = 10
     #: Large packs: a scene of more than ``large_pack_robots`` robots is stepped with at least
     #: ``large_pack_iterations`` solver iterations. Bullet's sequential-impulse solver converges more slowly
     #: on larger contact islands, and more slowly still at contact ERP 0.1, which pushes a jam's overlaps
-    #: out slowly: 50 densely packed robots tipped a robot in 1 of 4 seeds with 10 iterations and ran clean
-    #: in 4 of 4 with 20 (docs/sim_calibration.md, Stability). 7 is the largest pack measured clean at the
-    #: small-scene iterations (0 stops in 201 dense trials at 5), so the rule starts above it.
+    #: out slowly: 50 densely packed robots need 20 to run clean (docs/calibration/numerics.md, Stability).
+    #: 7 is the largest pack measured clean at the small-scene iterations, so the rule starts above it.
     large_pack_robots: int = 7
     large_pack_iterations: int = 20
     #: Bullet's solver residual threshold (``solverResidualThreshold``): the solver stops iterating early
@@ -87,13 +82,13 @@ class PhysicsConfig:
     #: Arm-arm friction. None: every robot-robot pair uses friction_robot_robot (the default, as in the
     #: authors' model). A number: arm-arm uses it, arm-body keeps friction_robot_robot, and body-body
     #: becomes friction_robot_robot**2 / friction_arm_arm (Bullet multiplies the two links' values). The
-    #: old 1.5 "hook" took back 35 % of every push and kept every pair bound (docs/physics_study.md, A).
+    #: old 1.5 "hook" took back part of every push and kept every pair bound (docs/physics_study.md, A).
     friction_arm_arm: float | None = None
     #: Robot-robot restitution set in Bullet: 0.80, which with ``contact_erp`` 0.1 gives two robots meeting
-    #: head on the authors' 0.85 (0.79-0.89 by where in the step they meet); Bullet adds the ERP's push-out
-    #: of the impact step's overlap to the bounce (docs/sim_calibration.md, "What restitution Bullet
-    #: gives"). Restitution is what makes collisions repel: kicks leaving the pair separating at 0.2-0.6
-    #: m/s instead of pushes that end at rest (study, A).
+    #: head on the authors' 0.85; Bullet adds the ERP's push-out of the impact step's overlap to the bounce
+    #: (docs/calibration/paper_figures.md, "What restitution Bullet gives"). Restitution is what makes
+    #: collisions repel: kicks that leave the pair separating instead of pushes that end at rest
+    #: (docs/physics_study.md, A).
     restitution: float = 0.80
     position_gain: float = 0.3                  # servo loop gain per step, used only if servo_bandwidth is None
     plate_size: float = 0.60                    # square plate side (m), centred on the origin
@@ -102,49 +97,47 @@ class PhysicsConfig:
     max_tilt: float = math.radians(25.0)        # trouble: body z axis tilted beyond this
     max_speed: float = 2.0                      # trouble: body speed (m/s)
     #: Bullet's contact error reduction: the fraction of an overlap pushed out per step. 0.1: the push-out
-    #: of the overlap found at an impact adds to the bounce, so at 0.6 (an earlier default) an impact
-    #: rebounded with 0.84-1.41 of the approach speed at restitution 0.85 (1.13 on average: super-elastic);
-    #: at 0.1 with restitution 0.80 with 0.79-0.89 (docs/sim_calibration.md, "What restitution Bullet gives";
-    #: P1, stability and speed unchanged on the same seeds, "p1_impact").
+    #: of the overlap found at an impact adds to the bounce, which at 0.6 (an earlier default) made impacts
+    #: super-elastic on average (docs/calibration/paper_figures.md, "What restitution Bullet gives").
     contact_erp: float = 0.1
     max_penetration: float = 0.004              # trouble: contact overlap (m) ...
     penetration_checks: int = 3                 # ... at this many trouble checks in a row (a spike is not a tunnel)
     trouble_every: int = 6                      # check for trouble every n control ticks
     #: Servo loop bandwidth (1/s): the gain per step is min(1, servo_bandwidth * time_step), so the servo's
     #: final approach (time constant 1 / bandwidth, 5 ms) is the same at every step and the drift converges.
-    #: 200 /s puts the converged single-robot drift at 145-154 um per cycle (P7: 40-150 um); 72 /s gives
-    #: 220 um, 300 /s 116 um but needs 1/960 s to converge (docs/sim_calibration.md, P7). None: the old
-    #: per-step ``position_gain``, whose approach shrinks with the step (drift 86 -> 22 um, no limit).
+    #: P7's drift is what pins it (the paper gives no bandwidth; docs/sim_calibration.md, "The default
+    #: model"; docs/physics_study.md). None: the old per-step ``position_gain``, whose approach shrinks with
+    #: the step, so the drift has no limit.
     servo_bandwidth: float | None = 200.0
     #: Bullet's restitutionVelocityThreshold (m/s): contacts approaching slower get no restitution. 0.01:
-    #: the authors' model bounces every impact; 0.2 (Bullet's) gives the same binding (8 vs 8 of 22 starts).
+    #: the authors' model bounces every impact (Bullet's 0.2 binds pairs the same: docs/sim_calibration.md,
+    #: "The default model").
     restitution_velocity_threshold: float | None = 0.01
     #: Body-plate restitution. 0: the bodies rest on the plate; 0.85 there makes robots hop and tip.
     #: None: the same as ``restitution``.
     restitution_body_plate: float | None = 0.0
     #: Bullet's continuous collision detection: swept-sphere radius (m) on every robot link; 0 = off (no
-    #: tunnelling at 1/480 s or finer: overlaps <= 1.3 mm in 7-robot runs, so it is not needed).
+    #: tunnelling at 1/480 s or finer, so it is not needed: docs/sim_calibration.md, "The default model").
     ccd_swept_sphere_radius: float = 0.0
     #: Factor on the body's roll and pitch inertia (mass, yaw inertia and contacts unchanged). 1: the body's
     #: own. x100 kept robots flat while impacts were super-elastic (contact ERP 0.6: jammed robots bounced
-    #: between two contacts and rolled over; study, C); at the default contact the robots' own inertia runs
-    #: clean (0 numerical stops in 130 dense trials at 5 solver iterations and 4 of 4 50-robot runs at 20;
-    #: docs/sim_calibration.md, "The robots' own roll and pitch inertia"), so nothing departs from the robot
-    #: here any more.
+    #: between two contacts and rolled over; docs/physics_study.md, C); at the default contact the robots'
+    #: own inertia runs clean (docs/calibration/paper_figures.md, "The robots' own roll and pitch inertia"),
+    #: so nothing departs from the robot here any more.
     tilt_inertia_scale: float = 1.0
     #: Factor on the body's yaw inertia (about the plate normal; mass and contacts unchanged). 1: a uniform box
     #: of the body's mass, the default. The authors' published Chrono code keeps the inertia of a box of
     #: density 100 kg/m^3 after setting the body's mass to 24.8 g, a yaw inertia 0.129 of the uniform body's;
-    #: measured on P1 as a diagnostic of whether their P1 rests on it (docs/sim_calibration.md, "The
-    #: authors' light body"), not taken: a real body with a servo at each end is no lighter in yaw than uniform.
+    #: measured on P1 as a diagnostic of whether their P1 rests on it (docs/calibration/paper_figures.md,
+    #: "The authors' light body"), not taken: a real body with a servo at each end is no lighter in yaw than uniform.
     yaw_inertia_scale: float = 1.0
     #: How the robot's mass is spread over its links. 'uniform' (the default): the body and two equal arms
     #: of the robot's spec, each link with the inertia of a uniform box of its mass. 'authors': as the
     #: authors' published Chrono code builds the small robot, every link's inertia that of a box of density
     #: 100 kg/m^3 (the body's that of a 3.2 g box), the body's mass the spec's (24.8 g), arm 1 (the left
     #: arm, joint 0) 3.19 g and arm 2 its 100 kg/m^3 box's 0.345 g (28.3 g in all). Measured as a
-    #: diagnostic of what lets the authors' in-phase pairs glide (docs/sim_calibration.md, "The authors'
-    #: uneven arms"), not taken: a robot with one arm nine times heavier than the other is not the paper's
+    #: diagnostic of what lets the authors' in-phase pairs glide (docs/calibration/paper_figures.md, "The
+    #: authors' uneven arms"), not taken: a robot with one arm nine times heavier than the other is not the paper's
     #: robot. The roll / pitch and yaw factors above multiply the body's inertia of either model.
     mass_model: str = 'uniform'
     #: Body-plate friction without static friction, as in the authors' smooth (SMC) Chrono contact. None
@@ -155,16 +148,15 @@ class PhysicsConfig:
     #: Chrono's Hertzian contact with the authors' values (E 2e7 Pa, nu 0.3, restitution 0.85, a 1e-4 s step,
     #: its default 0.1 m curvature radius, four corner points under a 28-35 g robot) makes its tangential
     #: force k_t v dt + g_t v below mu N, i.e. viscous up to about 7 mm/s. A diagnostic of whether the
-    #: authors' in-phase pairs glide because their plate has no static friction (docs/sim_calibration.md,
-    #: "A plate without static friction"); not taken.
+    #: authors' in-phase pairs glide because their plate has no static friction
+    #: (docs/calibration/paper_figures.md, "A plate without static friction"); not taken.
     plate_friction_slip: float | None = None
     #: The arms' ends in plan view. 'square': the authors' box arms (5.0 x 0.3 x 2.3 cm). 'round': the same
     #: box with both vertical end edges rounded to the arm's half thickness (a stadium in plan view: a box
     #: of length L - t between two vertical cylinders of diameter t, same length, height, mass and
     #: inertia), so an arm tip slides round another arm instead of catching on a box corner. Measured as a
-    #: candidate for the hook that binds the paper's isolated pairs and rejected: on P1's seeds 1000-1029
-    #: 6 of 30 trials have an isolated glider against 10 of 30 square (docs/sim_calibration.md, "Round
-    #: arm ends").
+    #: candidate for the hook that binds the paper's isolated pairs and rejected: no more isolated gliders
+    #: than square ends on P1's seeds (docs/calibration/paper_figures.md, "Round arm ends").
     arm_ends: str = 'square'
     #: Compliant robot-robot contacts, as in the authors' smooth-contact (penalty) Chrono model: the
     #: stiffness (N/m) of a robot-robot contact point. None: Bullet's rigid contacts (the restitution as a
@@ -173,7 +165,8 @@ class PhysicsConfig:
     #: ``restitution`` (reduced mass m / 2; a face-to-face contact has up to four points, so it is stiffer and
     #: more damped), Bullet's restitution impulse is off, and the body-plate contact is a critically damped
     #: spring whatever ``restitution_body_plate`` says (Bullet cannot make one contact of a link soft and
-    #: another rigid). Measured against the rigid default in docs/sim_calibration.md, "Soft contacts".
+    #: another rigid). Measured against the rigid default in docs/calibration/paper_figures.md, "Soft
+    #: contacts".
     contact_stiffness: float | None = None
 
     #: The sim's FSR reading is each face's contact force averaged over this time (s; a whole number of
