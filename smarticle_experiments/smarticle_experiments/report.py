@@ -30,9 +30,10 @@ import numpy as np
 from smarticle_sim.mujoco_engine import MujocoSettings
 from smarticle_sim.settings import BULLET_SOLVER_RESIDUAL_THRESHOLD
 
-from .spec import ExperimentSpec, Trial, seed_runs
+from .results import P6Result
+from .spec import ExperimentSpec, Trial, canonical, seed_runs
 from .stats import Estimate, bootstrap_mean, kaplan_meier, logrank, wilson
-from .store import ResultStore, write_atomic
+from .store import ResultStore, json_ready, write_atomic
 from .trials import MUJOCO_KINDS, config_of, ensemble_msd, msd_beta
 
 
@@ -638,6 +639,7 @@ def section_p6(ctx: Context) -> list[str]:
                      f'{se:.1f} | {np.mean([r["halts"] for r in rows]):.1f} |')
         ax1.scatter(x + np.linspace(-0.15, 0.15, life.size), life, s=12)
         ax2.step(np.r_[0, km.times], np.r_[1, km.survival], where='post', label=short if setting else label)
+    lines += p6_details_lines(order, float(ctx.spec.base.get('periods', 0.0)))
     ax1.set_xticks(range(len(order)), labels, fontsize=7, rotation=20)
     ax1.set_ylabel('C2 lifetime (periods)')
     ax2.set_xlabel('lifetime (periods)')
@@ -668,6 +670,30 @@ def section_p6(ctx: Context) -> list[str]:
                                           f'open loop {best_ol.text(".0f")}', longer,
                                           'inside = every feedback median interval above the open-loop ones'))
     return [*lines, '', '![P6 lifetimes](p6_lifetimes.png)']
+
+
+def _mean_se(values: Sequence[float]) -> str:
+    """``mean +- SE`` of some values (SE nan below two)."""
+    v = np.asarray(values, dtype=float)
+    se = v.std(ddof=1) / math.sqrt(v.size) if v.size > 1 else math.nan
+    return f'{v.mean():.2f} +- {se:.2f}'
+
+
+def p6_details_lines(order: Sequence[tuple[Any, list[dict[str, Any]]]], periods: float) -> list[str]:
+    """With the p6 kind's ``details``: each condition's travel while bound (W) and its periods with contact."""
+    if not order or any(r.get('travel_w') is None or r.get('contact_periods') is None
+                        for _, results in order for r in results):
+        return []
+    rows = [(cond, [P6Result.from_dict(r) for r in results]) for cond, results in order]
+    out = ['', '| condition | setting | travel while bound (W), mean +- SE | periods with contact, mean +- SE | '
+           'in the second half | final r (BL), median |', '| --- | --- | ---: | ---: | ---: | ---: |']
+    for (setting, alpha, feedback), rs in rows:
+        out.append(f'| {"feedback" if feedback else "open loop"} {alpha:g} deg | {dict(setting) or "-"} | '
+                   f'{_mean_se([r.travel_w or 0.0 for r in rs])} | '
+                   f'{_mean_se([len(r.contact_periods or []) for r in rs])} | '
+                   f'{_mean_se([sum(q >= periods / 2 for q in r.contact_periods or []) for r in rs])} | '
+                   f'{np.median([r.final_r_bl if r.final_r_bl is not None else math.nan for r in rs]):.2f} |')
+    return out
 
 
 def section_drift(ctx: Context) -> list[str]:
@@ -927,3 +953,67 @@ def write_report(spec: ExperimentSpec, trials: list[Trial], store: ResultStore, 
     path = folder / 'report.md'
     write_atomic(path, text)
     return path
+
+
+def _identity(kind: str, params: Mapping[str, Any], seed: int) -> str:
+    """A trial's identity without the code version: kind, parameters (as the store writes them) and seed."""
+    return canonical({'kind': kind, 'params': json_ready(params), 'seed': int(seed)})
+
+
+def stored_records(spec: ExperimentSpec, trials: Sequence[Trial], store: ResultStore) -> dict[str, dict[str, Any]]:
+    """The newest stored record of each of ``trials`` under the trial's key, whatever code version ran it
+    (the status of a claim is the last run of its spec)."""
+    newest: dict[str, dict[str, Any]] = {}
+    for record in store.records():
+        ident = _identity(str(record.get('kind')), record.get('params') or {}, int(record.get('seed', -1)))
+        if ident not in newest or float(record.get('end_unix') or 0) >= float(newest[ident].get('end_unix') or 0):
+            newest[ident] = record
+    out = {}
+    for t in trials:
+        record = newest.get(_identity(t.kind, t.params, t.seed))
+        if record is not None:
+            out[t.key] = record
+    return out
+
+
+def status_table(root: Path) -> str:
+    """The status of the paper's claims as Markdown, one line per claim: every current spec tagged ``paper``,
+    its sections' paper-against-sim rows computed from the newest stored trials under ``root``, and the
+    spec's report. A spec with no stored trial gets one 'not run' line."""
+    import tempfile
+    import warnings
+
+    from smarticle_sim.settings import NotConvergedWarning
+
+    from .spec import builtin_names, load_spec
+    from .store import code_version
+
+    code = code_version()
+    lines = ['| experiment | claim | paper | sim [95 % interval] | paper inside | trials used | report |',
+             '| --- | --- | --- | --- | --- | ---: | --- |']
+    for name in builtin_names():
+        with warnings.catch_warnings():
+            warnings.simplefilter('ignore', NotConvergedWarning)
+            spec = load_spec(name)
+        if spec.status != 'current' or 'paper' not in spec.tags:
+            continue
+        store = ResultStore(root / spec.store)
+        trials = spec.trials(code)
+        records = stored_records(spec, trials, store)
+        link = f'[report-{spec.name}]({store.folder / f"report-{spec.name}" / "report.md"})'
+        if not records:
+            lines.append(f'| {spec.name} | {spec.description} | - | not run | n/a | 0 | `smarticle-experiments run '
+                         f'{spec.name}` |')
+            continue
+        with tempfile.TemporaryDirectory() as tmp:
+            ctx = Context(spec, trials, records, Path(tmp))
+            for section in spec.report:
+                SECTIONS[section](ctx)
+        used = len(ctx.ok())
+        if not ctx.comparisons:
+            lines.append(f'| {spec.name} | {spec.description} | - | see report | n/a | {used} of {len(trials)} | '
+                         f'{link} |')
+        for c in ctx.comparisons:
+            lines.append(f'| {spec.name} | {c.quantity} | {c.paper} | {c.sim_text} | {_yes_no(c.inside)} | '
+                         f'{used} of {len(trials)} | {link} |')
+    return '\n'.join(lines)

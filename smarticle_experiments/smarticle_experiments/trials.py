@@ -34,8 +34,10 @@ from smarticle_tracking.gliders import Glider, GliderConfig, analyse_gliders
 from smarticle_tracking.msd import fit_msd_exponent, msd
 
 from .errors import SpecError
+from .results import C2HarvestResult, P6Result, SingleResult, TrialResult
 
-TrialFunction = Callable[[Mapping[str, Any], int], dict[str, Any]]
+#: A trial kind's function: (merged parameters, seed) -> a typed result (or a JSON-ready dict).
+TrialFunction = Callable[[Mapping[str, Any], int], 'TrialResult | dict[str, Any]']
 
 #: PhysicsConfig and RobotSpec field names a spec may override (``physics:`` and ``robot:`` mappings).
 PHYSICS_FIELDS: frozenset[str] = frozenset(f.name for f in fields(PhysicsConfig))
@@ -250,17 +252,17 @@ def _pair(p: Mapping[str, Any], seed: int, mujoco: bool) -> dict[str, Any]:
     return out
 
 
-def single_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+def single_trial(p: Mapping[str, Any], seed: int) -> SingleResult:
     """P7: one robot alone (heading drawn from the seed); drift per cycle in micrometres."""
     return _single(p, seed, mujoco=False)
 
 
-def single_mujoco_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+def single_mujoco_trial(p: Mapping[str, Any], seed: int) -> SingleResult:
     """The single kind's trial stepped by MuJoCo (``mujoco`` sets ``MujocoSettings`` fields)."""
     return _single(p, seed, mujoco=True)
 
 
-def _single(p: Mapping[str, Any], seed: int, mujoco: bool) -> dict[str, Any]:
+def _single(p: Mapping[str, Any], seed: int, mujoco: bool) -> SingleResult:
     """The single kind in either engine."""
     config = config_of(p)
     gait = make_gait(config, p['alpha_max_deg'], p['servo_speed'])
@@ -276,27 +278,44 @@ def _single(p: Mapping[str, Any], seed: int, mujoco: bool) -> dict[str, Any]:
     xy = rec.poses[::per, 0, :2]
     cycles = max(len(xy) - 1, 1)
     steps = np.linalg.norm(np.diff(xy, axis=0), axis=1)
-    return {'heading_deg': math.degrees(heading), 'trouble': rec.trouble, 'cycles': len(xy) - 1,
-            'drift_um_per_cycle': float(np.linalg.norm(xy[-1] - xy[0]) / cycles * 1e6),
-            'step_um_per_cycle': float(steps.mean() * 1e6) if steps.size else None}
+    return SingleResult(heading_deg=math.degrees(heading), trouble=rec.trouble, cycles=len(xy) - 1,
+                        drift_um_per_cycle=float(np.linalg.norm(xy[-1] - xy[0]) / cycles * 1e6),
+                        step_um_per_cycle=float(steps.mean() * 1e6) if steps.size else None)
 
 
-def p6_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+def p6_trial(p: Mapping[str, Any], seed: int) -> P6Result:
     """P6: a C2 pair of the feedback robot, open loop or with impact-halt feedback (the feedback package's trial).
 
     ``physics`` / ``robot`` replace fields of the feedback preset's PhysicsConfig / RobotSpec (a spec's
-    ``physics:`` / ``robot:`` or grid keys ``physics.X`` / ``robot.X``).
+    ``physics:`` / ``robot:`` or grid keys ``physics.X`` / ``robot.X``); ``windows`` (feedback parameters,
+    ``p6.window_values``) replaces the shipped impact windows; ``details`` adds the bound run's travel and
+    the periods with contact (a step hook: the trajectory is the same).
     """
-    from smarticle_experiments.p6 import Condition, run_pair_trial, start_base
+    from smarticle_experiments.p6 import Condition, run_pair_trial, start_base, windows_config
 
     noise = replace(NoiseConfig.none(), **noise_mapping(p.get('noise'))) if p.get('noise') else None
+    details = bool(p.get('details'))
     trial = run_pair_trial(Condition(float(p['alpha_max_deg']), bool(p['feedback'])), seed, float(p['periods']),
-                           base=start_base(str(p['start'])), noise=noise,
+                           feedback=windows_config(p['windows']) if p.get('windows') else None,
+                           base=start_base(str(p['start'])), noise=noise, count_contacts=details,
                            robot_changes=dict(p.get('robot') or {}), physics_changes=dict(p.get('physics') or {}))
-    return {'lifetime_periods': int(trial.lifetime_periods), 'censored': bool(trial.censored),
-            'halts': len(trial.halts), 'trouble': trial.trouble,
-            'r0_bl': trial.start[0], 'theta0_deg': trial.start[1], 'phi0_deg': trial.start[2],
-            'final_r_bl': _finite(float(trial.r[-1])) if len(trial.r) else None}
+    return P6Result(lifetime_periods=int(trial.lifetime_periods), censored=bool(trial.censored),
+                    halts=len(trial.halts), trouble=trial.trouble, r0_bl=trial.start[0], theta0_deg=trial.start[1],
+                    phi0_deg=trial.start[2], final_r_bl=_finite(float(trial.r[-1])) if len(trial.r) else None,
+                    travel_w=trial.travel_w if details else None,
+                    contact_periods=[int(q) for q in trial.contact_periods] if details else None)
+
+
+def c2_harvest_trial(p: Mapping[str, Any], seed: int) -> C2HarvestResult:
+    """A dense open-loop trial of the feedback robot (in phase, as the paper's collectives start): every C2
+    glider of at least ``min_periods`` sampled at its period boundaries after ``settle`` periods, with the
+    pair's full state (``c2_harvest.harvest_trial``)."""
+    from smarticle_experiments.c2_harvest import harvest_recording, sample_record
+
+    samples, trouble = harvest_recording(seed, float(p['periods']), str(p['preset']), float(p['alpha_max_deg']),
+                            int(p['robots']), int(p['min_periods']), int(p['settle']), int(p['sample_every']))
+    return C2HarvestResult(samples=[sample_record(s) for s in samples],
+                           gliders=len({(s.seed, min(s.i, s.j), max(s.i, s.j)) for s in samples}), trouble=trouble)
 
 
 def accuracy_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
@@ -326,9 +345,9 @@ def accuracy_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
             else None
     out['r_mean_bl'] = float(np.mean(np.hypot(*(rec.poses[:, 1, :2] - rec.poses[:, 0, :2]).T))) / bl
     single = single_trial({**p, 'physics': physics, 'periods': p['single_periods'], 'sample_every': 1}, seed)
-    out['drift_um_per_cycle'] = single['drift_um_per_cycle']
-    if single['trouble']:
-        out['trouble'] = '; '.join(t for t in (out['trouble'], single['trouble']) if t)
+    out['drift_um_per_cycle'] = single.drift_um_per_cycle
+    if single.trouble:
+        out['trouble'] = '; '.join(t for t in (out['trouble'], single.trouble) if t)
     return out
 
 
@@ -366,8 +385,12 @@ KINDS: dict[str, TrialKind] = {
     'single_mujoco': TrialKind(single_mujoco_trial, {**_COMMON, 'periods': 20.0, 'sample_every': 1, 'mujoco': {}},
                                'the single kind stepped by MuJoCo (cross-engine check)'),
     'p6': TrialKind(p6_trial, {'periods': 100.0, 'alpha_max_deg': 90.0, 'feedback': False, 'start': 'harvested',
-                               'physics': {}, 'robot': {}},
+                               'physics': {}, 'robot': {}, 'windows': {}, 'details': False},
                     'C2 pair of the feedback robot, open loop or feedback (P6; smarticle_experiments.p6)'),
+    'c2_harvest': TrialKind(c2_harvest_trial, {'periods': 150.0, 'preset': 'feedback', 'alpha_max_deg': 90.0,
+                                               'robots': 7, 'min_periods': 30, 'settle': 5, 'sample_every': 4},
+                            'dense open-loop feedback robots: where their C2 gliders sit (smarticle_experiments.'
+                            'c2_harvest)'),
     'accuracy': TrialKind(accuracy_trial, {**_COMMON, 'periods': 20.0, 'single_periods': 10.0, 'rate_hz': 240.0,
                                            'control_tick': 1.0 / 60.0, 'solver_iterations': 50, 'r_bl': 1.4,
                                            'theta_deg': 60.0, 'phi_deg': 180.0, 'phase2': 0.5},
@@ -401,6 +424,12 @@ def trial_function(kind: str) -> TrialFunction:
     return func
 
 
+def run_kind(kind: str, params: Mapping[str, Any], seed: int) -> dict[str, Any]:
+    """Run one trial of ``kind`` and return its result in the stored form (a typed result's ``as_dict``)."""
+    result = trial_function(kind)(params, seed)
+    return result.as_dict() if isinstance(result, TrialResult) else dict(result)
+
+
 def validate_params(kind: str, params: Mapping[str, Any]) -> None:
     """Raise SpecError (ValueError) if the merged params of a built-in kind make no valid config or gait."""
     if kind not in KINDS:
@@ -412,6 +441,15 @@ def validate_params(kind: str, params: Mapping[str, Any]) -> None:
             if params['start'] not in START_NAMES:
                 raise SpecError(f'params.start must be one of {", ".join(START_NAMES)}, got {params["start"]!r}')
             replace(NoiseConfig.none(), **noise_mapping(params.get('noise')))
+            config = make_config('feedback', dict(params.get('physics') or {}), dict(params.get('robot') or {}))
+            make_gait(config, params['alpha_max_deg'])
+            if params.get('windows'):
+                from smarticle_experiments.p6 import windows_config
+
+                windows_config(params['windows'])
+            return
+        if kind == 'c2_harvest':
+            make_gait(make_config(str(params['preset']), {}, {}), params['alpha_max_deg'])
             return
         config = config_of(params)
         if kind in MUJOCO_KINDS:

@@ -40,8 +40,8 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(case: str, tmp_path: Pa
         'zero seeds': ['run', spec_file(tmp_path, seeds=0)],
         'no such spec': ['run', 'p99'],
         'dead scheduler': ['run', spec_file(tmp_path), '--scheduler', f'tcp://127.0.0.1:{free_port()}'],
-        'bad seeds': ['run', spec_file(tmp_path), '--seeds', '5-2'],
-        'seeds and trials': ['run', spec_file(tmp_path), '--seeds', '0-1', '--trials', '2'],
+        'bad seeds': ['run', spec_file(tmp_path), '--seeds', '5..2'],
+        'seeds and trials': ['run', spec_file(tmp_path), '--seeds', '0..1', '--trials', '2'],
     }[case]
     try:
         code = main([*argv, '--out', str(out), '--no-progress'])
@@ -85,7 +85,7 @@ def test_a_report_over_some_of_the_seeds_sits_beside_the_whole_ones(tmp_path: Pa
     for t in spec.trials(code_version()):
         store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': {}, 'status': 'ok',
                      'result': {'drift_um_per_cycle': float(t.seed), 'trouble': ''}})
-    assert main(['report', path, '--seeds', '11-12', '--out', str(tmp_path / 'out')]) == 0
+    assert main(['report', path, '--seeds', '11..12', '--out', str(tmp_path / 'out')]) == 0
     part = (store.folder / 'report-lone-seeds-11-12' / 'report.md').read_text()
     assert '| 90 | 2 | 11.5 [' in part and '11, 12' in part
     assert main(['report', path, '--out', str(tmp_path / 'out')]) == 0
