@@ -15,11 +15,13 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 from smarticle_common.cli import seeds_argument
 
 from .assignments import parse_assignments
 from .errors import ExperimentError, SpecError
 from .harness import positive_float, run_mapping
+from .store import DEFAULT_ROOT, ResultStore
 
 
 @dataclass(frozen=True)
@@ -175,6 +177,138 @@ def c2_collisions_run(args: argparse.Namespace) -> int:
     return 0
 
 
+# ------------------------------------------------------------------ physics-study
+
+#: The physics study's experiments: their store (``physics_<name>``) and their table.
+STUDY_EXPERIMENTS: tuple[str, ...] = ('mechanism', 'drift', 'pair', 'basin', 'dense', 'impact')
+
+
+def _study_common(p: argparse.ArgumentParser, periods: float | None) -> None:
+    """Options every physics-study experiment takes."""
+    p.add_argument('--set', action='append', default=[], metavar='NAME=VALUE',
+                   help='a PhysicsConfig / RobotSpec field, gait_speed or x_ knob on top of the shipped defaults '
+                        '(repeatable)')
+    p.add_argument('--label', default=None, help='the setting\'s name in the tables (default: the --set items)')
+    if periods is not None:
+        p.add_argument('--periods', type=positive_float, default=periods, help='gait periods per trial')
+
+
+def physics_study_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``physics-study`` (one sub-command per experiment, and ``tables``)."""
+    from .harness import add_engine_arguments
+
+    sub = parser.add_subparsers(dest='experiment', required=True)
+    p = sub.add_parser('mechanism', help='collision impulses of P4-style pair starts (quadrants, normals)')
+    _study_common(p, 20.0)
+    p.add_argument('--phase2', type=float, nargs='*', default=[0.0], help='gait phase of both robots')
+    p = sub.add_parser('drift', help='a lone robot\'s drift per cycle against the time step')
+    _study_common(p, 20.0)
+    p.add_argument('--dt', type=int, nargs='*', default=[], help='physics rates (Hz; default: the shipped step)')
+    p.add_argument('--headings', type=float, nargs='*', default=[90.0])
+    p.add_argument('--alpha', type=float, default=90.0, help='alpha_max (deg)')
+    p = sub.add_parser('pair', help='pairs from given starts against the time step')
+    _study_common(p, 100.0)
+    p.add_argument('--dt', type=int, nargs='*', default=[], help='physics rates (Hz; default: the shipped step)')
+    p.add_argument('--starts', type=lambda t: [float(x) for x in t.split(',')], nargs='*',
+                   default=[[330.0, 180.0]], help='THETA,PHI (deg) starts')
+    p.add_argument('--phase2', type=float, nargs='*', default=[0.05])
+    p = sub.add_parser('basin', help='a (theta, phi) grid of pair starts at r = 1.3 BL: bound at the end?')
+    _study_common(p, 75.0)
+    p.add_argument('--step', type=float, default=30.0, help='grid step (deg)')
+    p.add_argument('--phase', type=float, nargs='*', default=[0.0, 0.25], help='gait phase of both robots')
+    p = sub.add_parser('dense', help='dense stability: trouble stops, overlap, gliders')
+    _study_common(p, 300.0)
+    p.add_argument('--seeds', type=seeds_argument, default=list(range(10)), metavar='SEEDS',
+                   help='seeds (default 0..9)')
+    p.add_argument('--robots', type=int, default=7)
+    p.add_argument('--jitter', type=float, default=0.0, help='gait phase offsets within +- this (periods)')
+    p = sub.add_parser('impact', help='effective restitution of head-on impacts of two bodies')
+    _study_common(p, None)
+    p.add_argument('--pairs', nargs='*', default=['0.6:0.85', '0.2:0.76', '0.1:0.8', '0.6:0'],
+                   help='contact ERP:restitution pairs')
+    p.add_argument('--dt', type=int, nargs='*', default=[960, 480, 1920], help='physics rates (Hz)')
+    p.add_argument('--speeds', type=float, nargs='*', default=[0.3, 0.1, 0.6], help='approach speeds (m/s)')
+    p.add_argument('--phases', type=int, default=16, help='meeting points per step')
+    for name in STUDY_EXPERIMENTS:
+        add_engine_arguments(sub.choices[name])
+    p = sub.add_parser('tables', help='the tables of every stored physics-study experiment')
+    p.add_argument('--out', type=Path, default=DEFAULT_ROOT, help=f'store root (default {DEFAULT_ROOT})')
+
+
+def _study_settings(args: argparse.Namespace) -> tuple[dict[str, object], str]:
+    """The --set items as settings and the label of the tables."""
+    return _assignments(args.set), args.label or (' '.join(args.set) or 'shipped')
+
+
+def study_rows(store: ResultStore, keys: list[str] | None = None) -> list[dict[str, object]]:
+    """The stored rows of a physics-study store: each trial's parameters, seed, physics rate and result."""
+    from .physics_study import dt_inv
+
+    rows = []
+    for r in store.records(keys):
+        if r.get('status') == 'ok':
+            rows.append({**r['params'], 'seed': r['seed'], 'dt_inv': dt_inv(r['params'].get('settings') or {}),
+                         **r['result']})
+    return rows
+
+
+def study_table(name: str, rows: list[dict[str, object]]) -> str:
+    """The table of one physics-study experiment."""
+    from . import physics_study as ps
+
+    table = {'mechanism': ps.mechanism_table, 'drift': ps.drift_table, 'pair': ps.pair_table,
+             'basin': ps.basin_table, 'dense': ps.dense_lines, 'impact': ps.impact_table}[name]
+    return '\n'.join(table(rows))  # type: ignore[arg-type]
+
+
+def physics_study_run(args: argparse.Namespace) -> int:
+    """Run one experiment of the physics study into the store (``physics_<experiment>``) and print its table."""
+    from .physics_study import MECH_STARTS
+
+    if args.experiment == 'tables':
+        for name in STUDY_EXPERIMENTS:
+            rows = study_rows(ResultStore(args.out / f'physics_{name}'))
+            if rows:
+                print(f'## {name}\n\n{study_table(name, rows)}\n')
+        return 0
+    settings, label = _study_settings(args)
+    rates = [{**settings, 'time_step': 1.0 / n} for n in getattr(args, 'dt', [])] or [settings]
+    seeds: list[int] = [0]
+    data: dict[str, object] = {'name': f'physics_{args.experiment}', 'store': f'physics_{args.experiment}',
+                               'description': f'physics study: {args.experiment}', 'tags': ['diagnostic']}
+    if getattr(args, 'periods', None) is not None:
+        data['periods'] = args.periods
+    if args.experiment == 'mechanism':
+        data.update(kind='study_collision', params={'label': label, 'settings': settings},
+                    grid=[{'phase': args.phase2, 'theta_deg': [float(t)], 'phi_deg': [float(f)]}
+                          for t, f in MECH_STARTS])
+    elif args.experiment == 'drift':
+        data.update(kind='study_drift', params={'label': label, 'alpha_max_deg': args.alpha},
+                    grid={'settings': rates, 'heading_deg': args.headings})
+    elif args.experiment == 'pair':
+        data.update(kind='study_pair', params={'label': label},
+                    grid=[{'settings': rates, 'theta_deg': [t], 'phi_deg': [f], 'phase2': args.phase2}
+                          for t, f in args.starts])
+    elif args.experiment == 'basin':
+        angles = [float(a) for a in np.arange(0.0, 360.0, args.step)]
+        data.update(kind='study_pair', params={'label': label, 'settings': settings, 'r_bl': 1.3},
+                    grid=[{'phase1': [p], 'phase2': [p], 'theta_deg': angles, 'phi_deg': angles} for p in args.phase])
+    elif args.experiment == 'dense':
+        seeds = list(args.seeds)
+        data.update(kind='study_dense', params={'label': label, 'settings': settings, 'robots': args.robots,
+                                                'jitter': args.jitter})
+    else:   # impact
+        blocks = []
+        for pair in args.pairs:
+            erp, _, e = pair.partition(':')
+            blocks.append({'settings': [{**settings, 'contact_erp': float(erp), 'restitution': float(e),
+                                         'time_step': 1.0 / n} for n in args.dt], 'speed_m_s': args.speeds})
+        data.update(kind='study_impact', params={'label': label, 'phases': args.phases}, grid=blocks)
+    _, trials, store, _ = run_mapping(data, seeds, args)
+    print(study_table(args.experiment, study_rows(store, [t.key for t in trials])))
+    return 0
+
+
 STUDY_COMMANDS: tuple[StudyCommand, ...] = (
     StudyCommand('p6', 'P6: C2 pairs of the feedback robot, open loop against impact-halt feedback', True,
                  p6_arguments, p6_run),
@@ -182,4 +316,7 @@ STUDY_COMMANDS: tuple[StudyCommand, ...] = (
                  'sampled at its period boundaries', True, c2_harvest_arguments, c2_harvest_run),
     StudyCommand('c2-collisions', 'every contact event of one C2 pair, recorded at every physics step', False,
                  c2_collisions_arguments, c2_collisions_run),
+    StudyCommand('physics-study', "the physics study's measurements (collisions, drift, pairs, basin, dense "
+                 'stability, impacts) on the engine, and their tables', False, physics_study_arguments,
+                 physics_study_run),
 )

@@ -41,8 +41,8 @@ from typing import Any
 import yaml
 
 from .errors import SpecError
-from .trials import (KINDS, MUJOCO_FIELDS, NOISE_FIELDS, PHYSICS_FIELDS, ROBOT_FIELDS, noise_mapping, resolve_kind,
-                     validate_params)
+from .configs import MUJOCO_FIELDS, NOISE_FIELDS, PHYSICS_FIELDS, ROBOT_FIELDS, noise_mapping
+from .trials import KINDS, resolve_kind, validate_params
 
 #: The sections a spec's ``report`` may name (``report.SECTIONS`` draws each; a test keeps the two equal).
 REPORT_SECTIONS: tuple[str, ...] = ('p1', 'trajectories', 'configurations', 'lifetimes', 'basin', 'alpha_sweep',

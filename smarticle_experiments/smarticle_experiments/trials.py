@@ -19,82 +19,30 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
-from smarticle_common.gait import GaitConfig
 from smarticle_sim.batch import Recording, run_trial
 from smarticle_sim.errors import SceneError, SimError
 from smarticle_sim.runner import ContactPeriods
 from smarticle_sim.mujoco_engine import MujocoSettings, run_mujoco
 from smarticle_sim.scenes import RobotPlacement, Scene, dense_scene, pair_scene
-from smarticle_sim.settings import NoiseConfig, PhysicsConfig, RobotSpec, SimConfig, robot_preset
+from smarticle_sim.settings import NoiseConfig, SimConfig
 from smarticle_tracking.gliders import Glider, GliderConfig, analyse_gliders
 from smarticle_tracking.msd import fit_msd_exponent, msd
 
+from . import physics_study
+from .configs import (config_of, make_config, make_gait,
+                      noise_mapping)
 from .errors import SpecError
 from .results import C2HarvestResult, P6Result, SingleResult, TrialResult
 
 #: A trial kind's function: (merged parameters, seed) -> a typed result (or a JSON-ready dict).
 TrialFunction = Callable[[Mapping[str, Any], int], 'TrialResult | dict[str, Any]']
 
-#: PhysicsConfig and RobotSpec field names a spec may override (``physics:`` and ``robot:`` mappings).
-PHYSICS_FIELDS: frozenset[str] = frozenset(f.name for f in fields(PhysicsConfig))
-ROBOT_FIELDS: frozenset[str] = frozenset(f.name for f in fields(RobotSpec)) - {'name'}
-#: NoiseConfig field names a spec may set (``noise:`` mapping; unset fields are off, ``NoiseConfig.none()``).
-NOISE_FIELDS: frozenset[str] = frozenset(f.name for f in fields(NoiseConfig))
 #: The trial kinds stepped by MuJoCo (``smarticle_sim.mujoco_engine``) instead of Bullet.
 MUJOCO_KINDS: frozenset[str] = frozenset({'pair_mujoco', 'single_mujoco'})
-
-#: MujocoSettings field names the MuJoCo kinds take (``params: {mujoco: {...}}`` or grid keys ``mujoco.X``).
-MUJOCO_FIELDS: frozenset[str] = frozenset(f.name for f in fields(MujocoSettings))
-
-
-def noise_mapping(value: Any) -> dict[str, Any]:
-    """A spec's ``noise:`` value as NoiseConfig overrides: 'paper' (the cited figures), 'none' / {} / None
-    (off) or a mapping of NoiseConfig fields (the unset ones off). 'paper' is written out field by field,
-    so the trial key records the values, not the name."""
-    if value is None or value == 'none':
-        return {}
-    if value == 'paper':
-        paper = NoiseConfig.paper()
-        return {name: getattr(paper, name) for name in ('clock_rate_sd', 'servo_jitter', 'friction_sd',
-                                                         'friction_length')}
-    if not isinstance(value, Mapping):
-        raise SpecError(f"noise must be 'paper', 'none' or a mapping of NoiseConfig fields, got {value!r}")
-    unknown = sorted(set(value) - NOISE_FIELDS)
-    if unknown:
-        raise SpecError(f'noise.{unknown[0]} is not a NoiseConfig field; known: {", ".join(sorted(NOISE_FIELDS))}')
-    return dict(value)
-
-
-def make_config(preset: str, physics: Mapping[str, Any], robot: Mapping[str, Any],
-                noise: Mapping[str, Any] | None = None) -> SimConfig:
-    """The project's default SimConfig for ``preset`` with PhysicsConfig / RobotSpec overrides and the noise
-    sources of ``noise`` (NoiseConfig fields; every source not named is off), all validated."""
-    unknown = sorted(set(physics) - PHYSICS_FIELDS)
-    if unknown:
-        raise SpecError(f'physics.{unknown[0]} is not a PhysicsConfig field; '
-                        f'known: {", ".join(sorted(PHYSICS_FIELDS))}')
-    unknown = sorted(set(robot) - ROBOT_FIELDS)
-    if unknown:
-        raise SpecError(f'robot.{unknown[0]} is not a RobotSpec field; known: {", ".join(sorted(ROBOT_FIELDS))}')
-    return SimConfig(replace(robot_preset(preset), **robot), replace(PhysicsConfig(), **physics),
-                     replace(NoiseConfig.none(), **noise_mapping(noise)))
-
-
-def make_gait(config: SimConfig, alpha_max_deg: float, servo_speed: float | None = None,
-              phase: float = 0.0) -> GaitConfig:
-    """The square gait at ``alpha_max_deg`` (servo speed: given, else the robot's)."""
-    return GaitConfig.from_degrees(float(alpha_max_deg), servo_speed=servo_speed or config.robot.servo_speed,
-                                   phase=phase)
-
-
-def config_of(p: Mapping[str, Any]) -> SimConfig:
-    """SimConfig of a trial's parameters."""
-    return make_config(str(p['preset']), dict(p.get('physics') or {}), dict(p.get('robot') or {}),
-                       dict(p.get('noise') or {}))
 
 
 # ------------------------------------------------------------------ glider measurements
@@ -373,6 +321,9 @@ _PAIR: dict[str, Any] = {**_COMMON, **_GLIDERS, 'periods': 75.0, 'r_bl': 1.3, 't
                          'phase2': 0.0, 'start_jitter': [0.0, 0.0, 0.0], 'sample_every': 2, 'min_periods': 10,
                          'bound_tail': 5, 'alpha2_delta_deg': 0.0}
 
+#: The physics study's kinds: flat ``settings`` (physics_study.split_settings) and a ``label`` for its tables.
+_STUDY: dict[str, Any] = {'settings': {}, 'label': 'shipped'}
+
 KINDS: dict[str, TrialKind] = {
     'dense': TrialKind(dense_trial, {**_COMMON, **_GLIDERS, 'robots': 7, 'phase_jitter': 0.0, 'sample_every': 4,
                                      'contacts': False},
@@ -391,6 +342,22 @@ KINDS: dict[str, TrialKind] = {
                                                'robots': 7, 'min_periods': 30, 'settle': 5, 'sample_every': 4},
                             'dense open-loop feedback robots: where their C2 gliders sit (smarticle_experiments.'
                             'c2_harvest)'),
+    'study_collision': TrialKind(physics_study.study_collision_trial,
+                                 {**_STUDY, 'r_bl': 1.3, 'theta_deg': 150.0, 'phi_deg': 180.0, 'phase': 0.0,
+                                  'periods': 20.0},
+                                 'physics study: a pair with every contact impulse measured (collision mechanism)'),
+    'study_drift': TrialKind(physics_study.study_drift_trial,
+                             {**_STUDY, 'heading_deg': 90.0, 'alpha_max_deg': 90.0, 'periods': 20.0, 'skip': 2},
+                             'physics study: a lone robot\'s drift per cycle and tilt, tick by tick'),
+    'study_pair': TrialKind(physics_study.study_pair_trial,
+                            {**_STUDY, 'r_bl': 1.3, 'theta_deg': 330.0, 'phi_deg': 180.0, 'phase1': 0.0,
+                             'phase2': 0.05, 'periods': 100.0},
+                            'physics study: a pair\'s contact per period, touching run, r and travel'),
+    'study_dense': TrialKind(physics_study.study_dense_trial,
+                             {**_STUDY, 'robots': 7, 'jitter': 0.0, 'periods': 300.0, 'sample_every': 6},
+                             'physics study: dense stability (trouble, overlap) and gliders'),
+    'study_impact': TrialKind(physics_study.study_impact_trial, {**_STUDY, 'speed_m_s': 0.3, 'phases': 16},
+                              'physics study: effective restitution of head-on impacts'),
     'accuracy': TrialKind(accuracy_trial, {**_COMMON, 'periods': 20.0, 'single_periods': 10.0, 'rate_hz': 240.0,
                                            'control_tick': 1.0 / 60.0, 'solver_iterations': 50, 'r_bl': 1.4,
                                            'theta_deg': 60.0, 'phi_deg': 180.0, 'phase2': 0.5},
@@ -447,6 +414,9 @@ def validate_params(kind: str, params: Mapping[str, Any]) -> None:
                 from smarticle_experiments.p6 import windows_config
 
                 windows_config(params['windows'])
+            return
+        if kind.startswith('study_'):
+            physics_study.study_config(dict(params.get('settings') or {}))
             return
         if kind == 'c2_harvest':
             make_gait(make_config(str(params['preset']), {}, {}), params['alpha_max_deg'])

@@ -91,7 +91,8 @@ def hashes(store_root: Path) -> list[dict[str, Any]]:
 
 def table(rows: list[Mapping[str, Any]]) -> str:
     """The hash table as Markdown."""
-    out = ['| spec | grid point | seed | status | params hash | result hash |', '| --- | --- | ---: | --- | --- | --- |']
+    out = ['| spec | grid point | seed | status | params hash | result hash |',
+           '| --- | --- | ---: | --- | --- | --- |']
     out += [f"| {r['spec']} | `{r['point']}` | {r['seed']} | {r['status']} | {r['params']} | {r['result']} |"
             for r in rows]
     return '\n'.join(out)
