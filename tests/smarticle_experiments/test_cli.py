@@ -68,6 +68,30 @@ def test_list_names_the_shipped_experiments(capsys: pytest.CaptureFixture[str]) 
     assert 'NotConvergedWarning' in next(line for line in listed.splitlines() if line.startswith('accuracy '))
 
 
+def test_list_groups_the_current_specs_by_tag_and_all_adds_the_rest(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(['list']) == 0
+    listed = capsys.readouterr().out
+    paper = listed.split('# paper\n')[1].split('\n# ')[0]
+    assert [line.split()[0] for line in paper.splitlines()] == ['p1', 'p2', 'p3', 'p4', 'p5', 'p6', 'p7']
+    assert '# benchmark' in listed and '# diagnostic' in listed and 'p1_fine ' not in listed
+    assert main(['list', '--all']) == 0
+    everything = capsys.readouterr().out
+    assert '# archived' in everything and '\np1_fine' in everything   # the archive of a source tree
+
+
+def test_list_into_a_closed_pipe_ends_quietly_and_version_prints() -> None:
+    """``smarticle-experiments list | head -1``: no BrokenPipeError traceback; ``--version`` names the package."""
+    import subprocess
+    import sys
+
+    command = f'{sys.executable} -m smarticle_experiments.cli list | head -1'
+    done = subprocess.run(['bash', '-c', command], capture_output=True, text=True, timeout=120, check=False)
+    assert done.stdout.startswith('# ') and 'Traceback' not in done.stderr and 'BrokenPipe' not in done.stderr
+    version = subprocess.run([sys.executable, '-m', 'smarticle_experiments.cli', '--version'], capture_output=True,
+                             text=True, timeout=60, check=False)
+    assert version.returncode == 0 and version.stdout.startswith('smarticle-experiments ')
+
+
 def test_report_of_a_spec_never_run_says_so(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(['report', spec_file(tmp_path), '--out', str(tmp_path / 'out')]) == 2
     assert 'run it first' in capsys.readouterr().err
