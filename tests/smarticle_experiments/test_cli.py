@@ -114,3 +114,25 @@ def test_a_report_over_some_of_the_seeds_sits_beside_the_whole_ones(tmp_path: Pa
     assert '| 90 | 2 | 11.5 [' in part and '11, 12' in part
     assert main(['report', path, '--out', str(tmp_path / 'out')]) == 0
     assert '| 90 | 4 | 11.5 [' in (store.folder / 'report-lone' / 'report.md').read_text()
+
+
+def test_report_summary_prints_one_line_per_claim_from_the_store(tmp_path: Path,
+                                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    """``report --summary``: the paper specs' claims from the newest stored trials, whatever code version ran
+    them; a paper spec without stored trials is one 'not run' line."""
+    from smarticle_experiments.spec import load_spec
+    from smarticle_experiments.store import ResultStore
+
+    spec = load_spec('p7')
+    store = ResultStore(tmp_path / 'out' / spec.store)
+    for t in spec.trials({'commit': 'an older one'}):   # stored by another code version: still found
+        store.write({'key': t.key, 'kind': t.kind, 'params': dict(t.params), 'seed': t.seed, 'point': dict(t.point),
+                     'status': 'ok', 'end_unix': 1.0,
+                     'result': {'drift_um_per_cycle': 70.0 + t.seed, 'trouble': ''}})
+    assert main(['report', '--summary', '--out', str(tmp_path / 'out')]) == 0
+    table = capsys.readouterr().out
+    p7 = [line for line in table.splitlines() if line.startswith('| p7 |')]
+    assert len(p7) == 1 and 'P7 drift per cycle at 90 deg' in p7[0] and '| 73.5 [' in p7[0]
+    assert '| 24 of 24 |' in p7[0] and 'report-p7' in p7[0]
+    assert '| p1 | ' in table and 'not run' in next(line for line in table.splitlines() if line.startswith('| p1 |'))
+    assert main(['report', 'p7', '--summary', '--out', str(tmp_path / 'out')]) == 2
