@@ -127,7 +127,7 @@ def _state_values(p: RobotPlacement) -> list[float]:
     return [float(v) for v in (p.x, p.y, p.heading, p.alpha1, p.alpha2, *(p.state.values() if p.state else ()))]
 
 
-def _placement(values: Sequence[float]) -> RobotPlacement:
+def _placement(values: Sequence[float | str]) -> RobotPlacement:
     """A robot's state from its ``ROBOT_COLUMNS`` values."""
     v = [float(x) for x in values]
     return RobotPlacement(v[0], v[1], v[2], v[3], v[4], None, RobotState.from_values(v[5:]))

@@ -258,7 +258,7 @@ def study_table(name: str, rows: list[dict[str, object]]) -> str:
 
     table = {'mechanism': ps.mechanism_table, 'drift': ps.drift_table, 'pair': ps.pair_table,
              'basin': ps.basin_table, 'dense': ps.dense_lines, 'impact': ps.impact_table}[name]
-    return '\n'.join(table(rows))  # type: ignore[arg-type]
+    return '\n'.join(table(rows))
 
 
 def physics_study_run(args: argparse.Namespace) -> int:

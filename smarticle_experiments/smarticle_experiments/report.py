@@ -970,9 +970,9 @@ def stored_records(spec: ExperimentSpec, trials: Sequence[Trial], store: ResultS
             newest[ident] = record
     out = {}
     for t in trials:
-        record = newest.get(_identity(t.kind, t.params, t.seed))
-        if record is not None:
-            out[t.key] = record
+        found = newest.get(_identity(t.kind, t.params, t.seed))
+        if found is not None:
+            out[t.key] = found
     return out
 
 
