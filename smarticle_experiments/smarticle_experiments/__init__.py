@@ -10,6 +10,7 @@ _EXPORTS: dict[str, str] = {
     'ResultStore': 'store',
     'KINDS': 'trials', 'run_kind': 'trials',
     'TrialResult': 'results', 'SingleResult': 'results', 'P6Result': 'results', 'C2HarvestResult': 'results',
+    'DenseResult': 'results', 'PairResult': 'results', 'InadmissiblePairResult': 'results',
     'main': 'cli',
     'ExperimentError': 'errors', 'SpecError': 'errors', 'SchedulerError': 'errors', 'StoreError': 'errors',
 }

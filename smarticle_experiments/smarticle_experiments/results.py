@@ -71,3 +71,55 @@ class C2HarvestResult(TrialResult):
     samples: list[dict[str, Any]]
     gliders: int                    # C2 gliders that gave samples
     trouble: str
+
+
+@dataclass(frozen=True)
+class DenseResult(TrialResult):
+    """Robots densely packed (P1-P3): the gliders of the glider analysis and per-trial figures."""
+
+    periods_run: float              # gait periods the trial ran (fewer if it ended in trouble)
+    trouble: str
+    peak_tilt_deg: float | None     # largest body tilt at the trouble checks (None if not measured)
+    peak_overlap_mm: float | None   # deepest contact overlap at the trouble checks
+    n_gliders: int
+    positive: bool                  # a glider of >= positive_periods
+    positive_isolated: bool         # ... that is isolated (no third robot within isolation_w W)
+    longest_periods: int            # the longest glider's lifetime (0 without a glider)
+    longest_class: str              # its class ('' without a glider)
+    longest_distance_w: float | None
+    #: One record per glider (i, j, class, start and lifetime in periods, r_bl, theta_deg, phi_deg, distance_w,
+    #: path_w, v_com_w_per_period, beta, isolated, com_path_w; contact_fraction when contacts are watched).
+    gliders: list[dict[str, Any]]
+    trajectory_bl: list[Any]        # body centres once per period (BL), [] without ``trajectory``
+    trajectory_dt: float            # s between the trajectory's samples (one gait period)
+
+
+@dataclass(frozen=True)
+class PairResult(DenseResult):
+    """Two robots from pair coordinates (P4, P5): binding at the end, travel, and the pair's gliders."""
+
+    r0_bl: float                    # start after the seeded jitter
+    theta0_deg: float
+    phi0_deg: float
+    admissible: bool                # True: the start did not overlap
+    bound_tail_periods: int         # periods at the end bound by r < r_bind_bl or contact
+    bound_at_end: bool              # bound_tail_periods >= bound_tail
+    colliding_tail_periods: int     # the same with contact alone
+    colliding_at_end: bool
+    out_of_reach_at_end: bool       # centres farther apart than twice the robot's reach
+    late_w: float                   # centre-of-mass travel over the second half (W)
+    r_end_bl: float
+    phi_end_deg: float
+
+
+@dataclass(frozen=True)
+class InadmissiblePairResult(TrialResult):
+    """A pair start whose robots overlap: not run (drawn black in the basin map, not a failure)."""
+
+    r0_bl: float
+    theta0_deg: float
+    phi0_deg: float
+    admissible: bool                # always False
+    why: str                        # the scene's refusal
+    trouble: str
+    gliders: list[dict[str, Any]]   # always []

@@ -36,7 +36,8 @@ from . import physics_study
 from .configs import (config_of, make_config, make_gait,
                       noise_mapping)
 from .errors import SpecError
-from .results import C2HarvestResult, P6Result, SingleResult, TrialResult
+from .results import (C2HarvestResult, DenseResult, InadmissiblePairResult, P6Result, PairResult, SingleResult,
+                      TrialResult)
 
 #: A trial kind's function: (merged parameters, seed) -> a typed result (or a JSON-ready dict).
 TrialFunction = Callable[[Mapping[str, Any], int], 'TrialResult | dict[str, Any]']
@@ -104,7 +105,7 @@ def analyse_recording(config: SimConfig, rec: Recording, period: float, p: Mappi
 # ------------------------------------------------------------------ trial kinds
 
 
-def dense_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+def dense_trial(p: Mapping[str, Any], seed: int) -> DenseResult:
     """P1/P2/P3: N robots densely packed, in phase (or jittered), for ``periods`` periods; its gliders."""
     config = config_of(p)
     gait = make_gait(config, p['alpha_max_deg'], p['servo_speed'])
@@ -115,7 +116,7 @@ def dense_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
     result = analyse_recording(config, rec, gait.period, p)
     if watch is not None:
         add_contact_fractions(result['gliders'], watch.periods)
-    return result
+    return DenseResult(**result)
 
 
 def add_contact_fractions(gliders: Sequence[dict[str, Any]], periods: Mapping[tuple[int, int], set[int]]) -> None:
@@ -145,19 +146,19 @@ def _tail(flags: Sequence[bool]) -> int:
     return tail
 
 
-def pair_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+def pair_trial(p: Mapping[str, Any], seed: int) -> PairResult | InadmissiblePairResult:
     """P4/P5: two robots from pair coordinates; binding at the end, travel, and the pair's gliders."""
     return _pair(p, seed, mujoco=False)
 
 
-def pair_mujoco_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+def pair_mujoco_trial(p: Mapping[str, Any], seed: int) -> PairResult | InadmissiblePairResult:
     """The pair kind's trial stepped by MuJoCo instead of Bullet (``smarticle_sim.mujoco_engine``): the same
     robots, start and gait; soft contacts with an isotropic friction cone. ``mujoco`` sets ``MujocoSettings``
     fields. A period counts as colliding if the robots touched at any servo update (1/960 s) in it."""
     return _pair(p, seed, mujoco=True)
 
 
-def _pair(p: Mapping[str, Any], seed: int, mujoco: bool) -> dict[str, Any]:
+def _pair(p: Mapping[str, Any], seed: int, mujoco: bool) -> PairResult | InadmissiblePairResult:
     """The pair kind in either engine."""
     config = config_of(p)
     gait = make_gait(config, p['alpha_max_deg'], p['servo_speed'])
@@ -168,7 +169,7 @@ def _pair(p: Mapping[str, Any], seed: int, mujoco: bool) -> dict[str, Any]:
                            (0.0, float(p['phase2'])), seed=seed,
                            alpha_max2=gait.alpha_max + math.radians(float(p['alpha2_delta_deg'])))
     except SceneError as exc:
-        return {**start, 'admissible': False, 'why': str(exc), 'trouble': '', 'gliders': []}
+        return InadmissiblePairResult(**start, admissible=False, why=str(exc), trouble='', gliders=[])
     per = max(1, round(gait.period / (config.physics.control_tick * int(p['sample_every']))))
     if mujoco:
         rec = run_mujoco(config, scene, float(p['periods']), int(p['sample_every']),
@@ -197,7 +198,7 @@ def _pair(p: Mapping[str, Any], seed: int, mujoco: bool) -> dict[str, Any]:
                out_of_reach_at_end=bool(r_all[-1] * bl > 2.0 * config.robot.reach),
                late_w=float(np.linalg.norm(com[-1] - com[len(com) // 2])) if len(com) else 0.0,
                r_end_bl=float(r_all[-1]), phi_end_deg=math.degrees(phi_end))
-    return out
+    return PairResult(**out)
 
 
 def single_trial(p: Mapping[str, Any], seed: int) -> SingleResult:
