@@ -1,10 +1,13 @@
-"""The trial kinds: pure functions of (params, seed) that run one trial and return a compact result.
+"""The registry of trial kinds (``KINDS``): pure functions of (params, seed) that run one trial and return a
+compact result. Every study of the package is a kind here, run by the one engine into the one store.
 
-This is the only module of the package that imports the other smarticle packages (sim, tracking,
-feedback, driver), so a refactor of those needs only these imports re-pointed.
+The other smarticle packages (sim, tracking, feedback) are imported by this module, ``configs`` and the
+study modules its kinds call (``p6``, ``c2_harvest``, ``physics_study``), never by the engine, store,
+statistics or report.
 
 A trial function takes the merged parameter mapping of one trial (``KINDS[kind].defaults`` overridden by
-the spec) and its seed, and returns a JSON-ready dict; it never reads or writes shared state. Lengths in
+the spec) and its seed, and returns a typed result (``results.TrialResult``) or a JSON-ready dict; it
+never reads or writes shared state. Lengths in
 the results are in body lengths (``_bl``) or in W (``_w``, W = BL for the smarticle), angles in degrees
 (``_deg``), speeds as stated. ``trouble`` is the SimTrouble message that ended the trial early ('' if
 none): such a trial still returns what it measured, and the report counts and lists it.
