@@ -30,7 +30,7 @@ import numpy as np
 from smarticle_sim.mujoco_engine import MujocoSettings
 from smarticle_sim.settings import BULLET_SOLVER_RESIDUAL_THRESHOLD
 
-from .results import P6Result
+from .results import P6Result, SingleResult
 from .spec import ExperimentSpec, Trial, canonical, seed_runs
 from .stats import Estimate, bootstrap_mean, kaplan_meier, logrank, wilson
 from .store import ResultStore, json_ready, write_atomic
@@ -611,10 +611,10 @@ def section_p6(ctx: Context) -> list[str]:
     condition; open loop and feedback are compared (log-rank) within a setting.
     """
     Key = tuple[tuple[tuple[str, Any], ...], float, bool]
-    groups: dict[Key, list[dict[str, Any]]] = defaultdict(list)
+    groups: dict[Key, list[P6Result]] = defaultdict(list)
     for t, r in ctx.ok():
         setting = other_grid_values(t.point, ('alpha_max_deg', 'feedback'))
-        groups[(setting, float(t.params['alpha_max_deg']), bool(t.params['feedback']))].append(r)
+        groups[(setting, float(t.params['alpha_max_deg']), bool(t.params['feedback']))].append(P6Result.from_dict(r))
     keys = sorted({k for setting, _, _ in groups for k, _ in setting})
     lines = ['| ' + ''.join(f'{k} | ' for k in keys) + 'condition | trials | reached the end | KM median lifetime '
              '(periods) [95 %] | mean lifetime +- SE | mean halts |',
@@ -630,13 +630,13 @@ def section_p6(ctx: Context) -> list[str]:
         short = f'{"fb" if feedback else "ol"} {alpha:g}' + ''.join(f' {v:g}' if isinstance(v, float) else f' {v}'
                                                                      for _, v in setting)
         labels.append(short)
-        km = kaplan_meier([r['lifetime_periods'] for r in rows], [bool(r['censored']) for r in rows])
+        km = kaplan_meier([r.lifetime_periods for r in rows], [r.censored for r in rows])
         medians[cond] = km.median
-        life = np.array([r['lifetime_periods'] for r in rows], dtype=float)
+        life = np.array([r.lifetime_periods for r in rows], dtype=float)
         se = life.std(ddof=1) / np.sqrt(life.size) if life.size > 1 else float('nan')
         lines.append('| ' + setting_cells(setting, keys)
                      + f'{label} | {len(rows)} | {km.censored} | {km.median.text(".0f")} | {life.mean():.1f} +- '
-                     f'{se:.1f} | {np.mean([r["halts"] for r in rows]):.1f} |')
+                     f'{se:.1f} | {np.mean([r.halts for r in rows]):.1f} |')
         ax1.scatter(x + np.linspace(-0.15, 0.15, life.size), life, s=12)
         ax2.step(np.r_[0, km.times], np.r_[1, km.survival], where='post', label=short if setting else label)
     lines += p6_details_lines(order, float(ctx.spec.base.get('periods', 0.0)))
@@ -650,14 +650,13 @@ def section_p6(ctx: Context) -> list[str]:
         plain = groups.get((setting, alpha, False))
         if feedback and plain:
             where = ''.join(f', {k} {v}' for k, v in setting)
-            if all(r['censored'] for r in (*plain, *rows)):
+            if all(r.censored for r in (*plain, *rows)):
                 lines.append(f'\nOpen loop against feedback at {alpha:g} deg{where}: every pair reached the end, no '
                              'test.')
                 continue
-            stat, p = logrank(*(([r['lifetime_periods'] for r in g], [bool(r['censored']) for r in g])
-                                for g in (plain, rows)))
-            ratio = (np.mean([r['lifetime_periods'] for r in rows])
-                     / max(float(np.mean([r['lifetime_periods'] for r in plain])), 1e-9))
+            stat, p = logrank(*(([r.lifetime_periods for r in g], [r.censored for r in g]) for g in (plain, rows)))
+            ratio = (np.mean([r.lifetime_periods for r in rows])
+                     / max(float(np.mean([r.lifetime_periods for r in plain])), 1e-9))
             lines.append(f'\nLog-rank (censored lifetimes), open loop against feedback at {alpha:g} deg{where}: '
                          f'statistic {stat:.3f}, p = {p:.3g}; mean lifetime ratio feedback / open loop {ratio:.2f}.')
     fb = [m for (_, _, f), m in medians.items() if f]
@@ -679,12 +678,11 @@ def _mean_se(values: Sequence[float]) -> str:
     return f'{v.mean():.2f} +- {se:.2f}'
 
 
-def p6_details_lines(order: Sequence[tuple[Any, list[dict[str, Any]]]], periods: float) -> list[str]:
+def p6_details_lines(order: Sequence[tuple[Any, list[P6Result]]], periods: float) -> list[str]:
     """With the p6 kind's ``details``: each condition's travel while bound (W) and its periods with contact."""
-    if not order or any(r.get('travel_w') is None or r.get('contact_periods') is None
-                        for _, results in order for r in results):
+    rows = list(order)
+    if not rows or any(r.travel_w is None or r.contact_periods is None for _, rs in rows for r in rs):
         return []
-    rows = [(cond, [P6Result.from_dict(r) for r in results]) for cond, results in order]
     out = ['', '| condition | setting | travel while bound (W), mean +- SE | periods with contact, mean +- SE | '
            'in the second half | final r (BL), median |', '| --- | --- | ---: | ---: | ---: | ---: |']
     for (setting, alpha, feedback), rs in rows:
@@ -705,7 +703,7 @@ def section_drift(ctx: Context) -> list[str]:
     groups: dict[tuple[tuple[str, Any], ...], dict[float, list[float]]] = defaultdict(lambda: defaultdict(list))
     for t, r in ctx.ok():
         setting = other_grid_values(t.point, ('alpha_max_deg',))
-        groups[setting][float(t.params['alpha_max_deg'])].append(r['drift_um_per_cycle'])
+        groups[setting][float(t.params['alpha_max_deg'])].append(SingleResult.from_dict(r).drift_um_per_cycle)
     target = _paper(ctx, 'drift_um', 75.0)
     keys = sorted({k for setting in groups for k, _ in setting})
     lines = ['| ' + ''.join(f'{k} | ' for k in keys) + 'alpha_max (deg) | robots | drift (um / cycle) [95 %] |',

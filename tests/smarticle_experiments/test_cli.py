@@ -108,7 +108,8 @@ def test_a_report_over_some_of_the_seeds_sits_beside_the_whole_ones(tmp_path: Pa
     store = ResultStore(tmp_path / 'out' / spec.store)
     for t in spec.trials(code_version()):
         store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': {}, 'status': 'ok',
-                     'result': {'drift_um_per_cycle': float(t.seed), 'trouble': ''}})
+                     'result': {'drift_um_per_cycle': float(t.seed), 'trouble': '', 'heading_deg': 0.0, 'cycles': 20,
+                                'step_um_per_cycle': float(t.seed)}})
     assert main(['report', path, '--seeds', '11..12', '--out', str(tmp_path / 'out')]) == 0
     part = (store.folder / 'report-lone-seeds-11-12' / 'report.md').read_text()
     assert '| 90 | 2 | 11.5 [' in part and '11, 12' in part
@@ -128,7 +129,8 @@ def test_report_summary_prints_one_line_per_claim_from_the_store(tmp_path: Path,
     for t in spec.trials({'commit': 'an older one'}):   # stored by another code version: still found
         store.write({'key': t.key, 'kind': t.kind, 'params': dict(t.params), 'seed': t.seed, 'point': dict(t.point),
                      'status': 'ok', 'end_unix': 1.0,
-                     'result': {'drift_um_per_cycle': 70.0 + t.seed, 'trouble': ''}})
+                     'result': {'drift_um_per_cycle': 70.0 + t.seed, 'trouble': '', 'heading_deg': 0.0, 'cycles': 20,
+                                'step_um_per_cycle': 70.0}})
     assert main(['report', '--summary', '--out', str(tmp_path / 'out')]) == 0
     table = capsys.readouterr().out
     p7 = [line for line in table.splitlines() if line.startswith('| p7 |')]
