@@ -27,12 +27,6 @@ setup(
     entry_points={
         'console_scripts': [
             'smarticle-experiments = smarticle_experiments.cli:main',
-            'smarticle-p6 = smarticle_experiments.p6:main',
-            'smarticle-c2-collisions = smarticle_experiments.c2_collisions:main',
-            'smarticle-c2-harvest = smarticle_experiments.c2_harvest:main',
-            'smarticle-p6-sensitivity = smarticle_experiments.p6_sensitivity:main',
-            'smarticle-paper-probes = smarticle_experiments.paper_probes:main',
-            'smarticle-physics-study = smarticle_experiments.physics_study:main',
         ],
     },
 )

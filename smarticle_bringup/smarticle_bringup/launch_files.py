@@ -43,6 +43,8 @@ from pathlib import Path
 from typing import Any
 from xml.parsers import expat
 
+from .errors import BringupError
+
 #: How deep includes may nest (a self-including file that never stops ends here): enough for the sim
 #: bridge's 200 robots.
 MAX_INCLUDE_DEPTH = 256
@@ -51,7 +53,7 @@ _TRUE, _FALSE = ('true', '1'), ('false', '0')
 EMPTY_YAML_STRING = "''"
 
 
-class LaunchFileError(ValueError):
+class LaunchFileError(BringupError, ValueError):
     """A launch file that cannot be used: malformed XML, unknown argument, package, executable or file."""
 
 

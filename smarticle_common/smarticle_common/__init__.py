@@ -19,6 +19,7 @@ Modules (no rclpy import in any of them but ``node``, the node helper):
 
 from __future__ import annotations
 
+from .errors import CommonError, PairInputError, RobotSpecError
 from .facts import (BODY_LENGTH, FEEDBACK, GAIT_PERIOD, PRESETS, R_BIND_BL, SERVO_SPEED, SMALL, TAG_DICTIONARY,
                     TAG_SIZE, RobotSpec, robot_preset)
 from .gait import GaitCommand, GaitConfig, GaitError, SquareGait
@@ -26,6 +27,7 @@ from .pairs import PairCoordinates, one_pair, pair_coordinates, place_pair, wrap
 
 __all__ = [
     'BODY_LENGTH', 'FEEDBACK', 'GAIT_PERIOD', 'PRESETS', 'R_BIND_BL', 'SERVO_SPEED', 'SMALL', 'TAG_DICTIONARY',
-    'TAG_SIZE', 'GaitCommand', 'GaitConfig', 'GaitError', 'PairCoordinates', 'RobotSpec', 'SquareGait', 'one_pair',
-    'pair_coordinates', 'place_pair', 'robot_preset', 'wrap_2pi', 'wrap_pi',
+    'TAG_SIZE', 'CommonError', 'GaitCommand', 'GaitConfig', 'GaitError', 'PairCoordinates', 'PairInputError',
+    'RobotSpec', 'RobotSpecError', 'SquareGait', 'one_pair', 'pair_coordinates', 'place_pair', 'robot_preset',
+    'wrap_2pi', 'wrap_pi',
 ]

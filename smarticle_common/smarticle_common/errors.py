@@ -7,7 +7,7 @@ class CommonError(ValueError):
     """Base class of every error raised by smarticle_common."""
 
 
-class SpecError(CommonError):
+class RobotSpecError(CommonError):
     """An invalid robot spec (a size, mass or servo value that is not physical)."""
 
 

@@ -13,7 +13,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from .errors import SpecError
+from .errors import RobotSpecError
 
 #: Gait period T of the paper's square gait (s).
 GAIT_PERIOD = 1.6
@@ -34,7 +34,7 @@ TAG_DICTIONARY = 'DICT_4X4_50'
 R_BIND_BL = 1.6
 
 
-def require_positive(obj: Any, *names: str, error: type[ValueError] = SpecError) -> None:
+def require_positive(obj: Any, *names: str, error: type[ValueError] = RobotSpecError) -> None:
     """Raise ``error`` unless every named field of ``obj`` is a finite number > 0."""
     for name in names:
         value = getattr(obj, name)
@@ -43,7 +43,7 @@ def require_positive(obj: Any, *names: str, error: type[ValueError] = SpecError)
             raise error(f'{type(obj).__name__}.{name} must be a finite number > 0, got {value!r}')
 
 
-def require_non_negative(obj: Any, *names: str, error: type[ValueError] = SpecError) -> None:
+def require_non_negative(obj: Any, *names: str, error: type[ValueError] = RobotSpecError) -> None:
     """Raise ``error`` unless every named field of ``obj`` is a finite number >= 0."""
     for name in names:
         value = getattr(obj, name)
@@ -74,10 +74,10 @@ class RobotSpec:
                   'arm_height', 'total_mass', 'arm_mass', 'servo_speed', 'servo_torque')
         require_non_negative(self, 'arm_clearance')
         if self.body_mass <= 0.0:
-            raise SpecError(f'RobotSpec.arm_mass: two arms of {self.arm_mass} kg leave nothing of '
+            raise RobotSpecError(f'RobotSpec.arm_mass: two arms of {self.arm_mass} kg leave nothing of '
                               f'total_mass {self.total_mass} kg for the body')
         if self.arm_clearance + self.arm_height > self.body_height:
-            raise SpecError(f'RobotSpec.arm_height: arms ({self.arm_clearance} + {self.arm_height} m) '
+            raise RobotSpecError(f'RobotSpec.arm_height: arms ({self.arm_clearance} + {self.arm_height} m) '
                               f'must fit within body_height {self.body_height} m')
 
     @property
@@ -134,8 +134,8 @@ BODY_LENGTH = SMALL.body_length
 
 
 def robot_preset(name: str) -> RobotSpec:
-    """Return the robot preset ``name`` (``small`` or ``feedback``) or raise SpecError."""
+    """Return the robot preset ``name`` (``small`` or ``feedback``) or raise RobotSpecError."""
     try:
         return PRESETS[name]
     except KeyError:
-        raise SpecError(f'robot preset {name!r} is unknown; choose one of {", ".join(PRESETS)}') from None
+        raise RobotSpecError(f'robot preset {name!r} is unknown; choose one of {", ".join(PRESETS)}') from None

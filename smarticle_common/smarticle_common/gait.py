@@ -26,6 +26,7 @@ import math
 import dataclasses
 from dataclasses import dataclass
 
+from .errors import CommonError
 from .facts import GAIT_PERIOD, SERVO_SPEED
 
 #: Arm index moved in each quarter of the period.
@@ -42,7 +43,7 @@ TIME_EPS = 1e-9
 ALPHA_MAX_RANGE_DEG = (5.0, 120.0)
 
 
-class GaitError(ValueError):
+class GaitError(CommonError):
     """An invalid gait setting or call."""
 
 

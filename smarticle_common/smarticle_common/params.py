@@ -13,9 +13,10 @@ from typing import Any
 import yaml
 
 from . import topics
+from .errors import CommonError
 
 
-class ParameterError(ValueError):
+class ParameterError(CommonError):
     """A parameter value that is missing, of the wrong type or out of range."""
 
 

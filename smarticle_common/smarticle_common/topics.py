@@ -17,6 +17,8 @@ from dataclasses import dataclass
 from enum import Enum
 from typing import Any
 
+from .errors import CommonError
+
 #: Joint names used in ``joint_commands`` and ``joint_states`` (arm 1 at the body's -x end).
 JOINT_NAMES: tuple[str, str] = ('arm1', 'arm2')
 
@@ -74,7 +76,7 @@ class TopicSpec:
         return self.name
 
 
-class ContractError(ValueError):
+class ContractError(CommonError):
     """A name, id or type that is not part of the topic contract."""
 
 

@@ -4,25 +4,19 @@
 same noise) open loop and records, at every physics step, both robots' FSR forces, which links touch and
 r; ``smarticle_feedback.collisions`` cuts that into events (gait quarter, links and faces, FSR peaks, dr)
 and their signature.
-Command line: ``smarticle-c2-collisions --seed 1 --periods 150 --out out/feedback/c2`` (table, CSV, PNG,
-npz); ``--start colliding --noise none`` records the earlier start, which collides from its first period.
+Command line: ``smarticle-experiments c2-collisions --seed 1 --periods 150 --out out/feedback/c2`` (table,
+CSV, PNG, npz); ``--start colliding --noise none`` records the start that collides from its first period.
 """
 
 from __future__ import annotations
 
-import argparse
-import math
-import sys
-from collections.abc import Sequence
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 from smarticle_common.gait import GaitConfig
-from smarticle_feedback.collisions import (CollisionRecord, find_events, format_events, format_signature,
-                                           plot_events, signature, write_events_csv)
+from smarticle_feedback.collisions import CollisionRecord
 
-from .p6 import C2_START, START_NAMES, p6_noise, start_base, start_scene
+from .p6 import C2_START, start_scene
 
 
 def record_pair(seed: int = 0, periods: float = 40.0, alpha_max_deg: float = 90.0, preset: str = 'feedback',
@@ -67,33 +61,3 @@ def record_pair(seed: int = 0, periods: float = 40.0, alpha_max_deg: float = 90.
     return CollisionRecord(np.asarray(times), np.asarray(fsr), np.asarray(links),
                            coords.r[:, 0] / config.robot.body_length, gait.period,
                            (float(phases[0]), float(phases[1])), clock_rates=(float(rates[0]), float(rates[1])))
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of `smarticle-c2-collisions`: event table and signature on stdout; CSV, PNG, npz in --out."""
-    parser = argparse.ArgumentParser(prog='smarticle-c2-collisions', description=__doc__.split('\n')[0])
-    parser.add_argument('--seed', type=int, default=0)
-    parser.add_argument('--periods', type=float, default=40.0)
-    parser.add_argument('--alpha', type=float, default=90.0, help='alpha_max (deg)')
-    parser.add_argument('--rows', type=int, default=24, help='events shown in the table on stdout')
-    parser.add_argument('--start', choices=sorted(START_NAMES), default='harvested',
-                        help='the P6 start (default harvested; held: the state of a C2 held by collisions; '
-                             'colliding: robot 2 a quarter period ahead)')
-    parser.add_argument('--noise', choices=['paper', 'none'], default='paper',
-                        help='noise with a cause, as in P6 (default paper)')
-    parser.add_argument('--out', default='out/feedback/c2', help='output folder')
-    args = parser.parse_args(argv)
-    out = Path(args.out)
-    rec = record_pair(args.seed, args.periods, args.alpha, base=start_base(args.start), noise=p6_noise(args.noise))
-    rec.save(out / 'c2_steps.npz')
-    events = find_events(rec)
-    write_events_csv(events, out / 'c2_events.csv')
-    first = math.floor((events[0].t_peak - rec.start_time) / rec.period) if events else 0   # plot from the first event
-    plot_events(rec, events, out / 'c2_events.png', (float(first), float(min(first + 4, args.periods))))
-    sys.stdout.write(format_events(events, limit=args.rows) + '\n\n' + format_signature(signature(events)) + '\n')
-    sys.stdout.write(f'\n{len(events)} events in {args.periods:g} periods (seed {args.seed}); files in {out}/\n')
-    return 0
-
-
-if __name__ == '__main__':
-    sys.exit(main())

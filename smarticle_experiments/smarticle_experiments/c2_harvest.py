@@ -10,18 +10,16 @@ start that ``pair_scene`` can place exactly (phases 0 and 0): ``p6.C2_START``.
 A pair is written in the order that puts theta in [0, 180) deg (robot 2 on robot 1's front side): the two
 orders of one C2 pair differ by about 180 deg in theta, and the median needs one of them.
 
-Command line: ``smarticle-c2-harvest --seeds 5000-5019 --periods 150 --out out/feedback/c2_harvest``
-(table on stdout, CSV of every sample, histogram PNG).
+Each dense trial is a ``c2_harvest`` trial kind on the experiments engine; the command line
+``smarticle-experiments c2-harvest --seeds 5000..5019 --periods 150`` runs them into the store and writes
+the table (stdout), the CSV of every sample, the held starts and the histogram PNG from the stored trials.
 """
 
 from __future__ import annotations
 
-import argparse
 import csv
 import math
-import sys
-from collections.abc import Sequence
-from concurrent.futures import ProcessPoolExecutor
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -72,6 +70,13 @@ def harvest_trial(seed: int, periods: float = 150.0, preset: str = 'feedback', a
                   robots: int = 7, min_periods: int = MIN_PERIODS, settle: int = SETTLE_PERIODS,
                   sample_every: int = 4) -> list[C2Sample]:
     """The C2 samples of one dense open-loop trial (seeded scene, in phase)."""
+    return harvest_recording(seed, periods, preset, alpha_max_deg, robots, min_periods, settle, sample_every)[0]
+
+
+def harvest_recording(seed: int, periods: float = 150.0, preset: str = 'feedback', alpha_max_deg: float = 90.0,
+                      robots: int = 7, min_periods: int = MIN_PERIODS, settle: int = SETTLE_PERIODS,
+                      sample_every: int = 4) -> tuple[list[C2Sample], str]:
+    """The C2 samples of one dense open-loop trial and the SimTrouble message that ended it early ('' if none)."""
     from smarticle_common.gait import GaitConfig
     from smarticle_sim.batch import run_trial
     from smarticle_sim.runner import ContactPeriods
@@ -102,7 +107,7 @@ def harvest_trial(seed: int, periods: float = 150.0, preset: str = 'feedback', a
             state = snapshots.states.get(k)
             samples.append(C2Sample(seed, a, b, k, r / bl, theta, phi, touched,
                                     (state[a], state[b]) if state is not None else None))
-    return samples
+    return samples, rec.trouble
 
 
 def front_order(i: int, j: int, poses: np.ndarray) -> tuple[int, int, tuple[float, float, float]]:
@@ -117,23 +122,30 @@ def front_order(i: int, j: int, poses: np.ndarray) -> tuple[int, int, tuple[floa
     return a, b, (r, math.degrees(theta) % 360.0, math.degrees(phi) % 360.0)
 
 
-def _harvest(args: tuple[int, float, str, float]) -> list[C2Sample]:
-    seed, periods, preset, alpha = args
-    return harvest_trial(seed, periods, preset, alpha)
+def _state_values(p: RobotPlacement) -> list[float]:
+    """One robot's state as the ``ROBOT_COLUMNS`` values."""
+    return [float(v) for v in (p.x, p.y, p.heading, p.alpha1, p.alpha2, *(p.state.values() if p.state else ()))]
 
 
-def harvest(seeds: Sequence[int], periods: float = 150.0, preset: str = 'feedback', alpha_max_deg: float = 90.0,
-            jobs: int = 2, progress: bool = True) -> list[C2Sample]:
-    """The C2 samples of every seed's trial, ``jobs`` processes in parallel."""
-    out: list[C2Sample] = []
-    with ProcessPoolExecutor(max_workers=max(1, jobs)) as pool:
-        for seed, samples in zip(seeds, pool.map(_harvest, [(s, periods, preset, alpha_max_deg) for s in seeds]),
-                                 strict=True):
-            out += samples
-            if progress:
-                n = len({(s.i, s.j) for s in samples})
-                sys.stderr.write(f'seed {seed}: {n} C2 gliders, {len(samples)} period samples\n')
-    return out
+def _placement(values: Sequence[float | str]) -> RobotPlacement:
+    """A robot's state from its ``ROBOT_COLUMNS`` values."""
+    v = [float(x) for x in values]
+    return RobotPlacement(v[0], v[1], v[2], v[3], v[4], None, RobotState.from_values(v[5:]))
+
+
+def sample_record(s: C2Sample) -> dict[str, Any]:
+    """A sample as a JSON-ready dict (the stored form; floats exact, the state as two ``ROBOT_COLUMNS`` lists)."""
+    return {'seed': s.seed, 'i': s.i, 'j': s.j, 'period': s.period, 'r_bl': s.r_bl, 'theta_deg': s.theta_deg,
+            'phi_deg': s.phi_deg, 'touched': bool(s.touched),
+            'state': None if s.state is None else [_state_values(p) for p in s.state]}
+
+
+def sample_from_record(data: Mapping[str, Any]) -> C2Sample:
+    """The sample of a ``sample_record`` dict."""
+    state = data.get('state')
+    return C2Sample(int(data['seed']), int(data['i']), int(data['j']), int(data['period']), float(data['r_bl']),
+                    float(data['theta_deg']), float(data['phi_deg']), bool(data['touched']),
+                    None if state is None else (_placement(state[0]), _placement(state[1])))
 
 
 def signed_deg(angle: np.ndarray) -> np.ndarray:
@@ -195,8 +207,7 @@ def write_csv(samples: Sequence[C2Sample], path: Path) -> Path:
         for s in samples:
             state: list[object] = [''] * (2 * len(ROBOT_COLUMNS))
             if s.state is not None:
-                state = [repr(float(v)) for p in s.state
-                         for v in (p.x, p.y, p.heading, p.alpha1, p.alpha2, *(p.state.values() if p.state else ()))]
+                state = [repr(v) for p in s.state for v in _state_values(p)]
             writer.writerow([s.seed, s.i, s.j, s.period, f'{s.r_bl:.5f}', f'{s.theta_deg:.3f}', f'{s.phi_deg:.3f}',
                              int(s.touched), *state])
     return path
@@ -215,11 +226,8 @@ def read_csv(path: str | Path) -> list[C2Sample]:
             try:
                 state = None
                 if row.get('a_x'):
-                    pair = []
-                    for who in 'ab':
-                        v = [float(row[f'{who}_{c}']) for c in ROBOT_COLUMNS]
-                        pair.append(RobotPlacement(v[0], v[1], v[2], v[3], v[4], None, RobotState.from_values(v[5:])))
-                    state = (pair[0], pair[1])
+                    state = (_placement([row[f'a_{c}'] for c in ROBOT_COLUMNS]),
+                             _placement([row[f'b_{c}'] for c in ROBOT_COLUMNS]))
                 out.append(C2Sample(int(row['seed']), int(row['i']), int(row['j']), int(row['period']),
                                     float(row['r_bl']), float(row['theta_deg']), float(row['phi_deg']),
                                     bool(int(row.get('touched') or 0)), state))
@@ -276,49 +284,3 @@ def plot(samples: Sequence[C2Sample], path: Path) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path)
     return path
-
-
-def parse_seeds(text: str) -> list[int]:
-    """'5000-5019' or '1,2,3' -> seeds."""
-    if '-' in text:
-        lo, hi = (int(v) for v in text.split('-', 1))
-        if hi < lo:
-            raise ValueError(f'seed range {text!r} is empty')
-        return list(range(lo, hi + 1))
-    return [int(v) for v in text.split(',') if v.strip()]
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of `smarticle-c2-harvest`."""
-    parser = argparse.ArgumentParser(prog='smarticle-c2-harvest', description=__doc__.split('\n')[0])
-    parser.add_argument('--seeds', default='5000-5019', help="seed range 'a-b' or list 'a,b,c'")
-    parser.add_argument('--periods', type=float, default=150.0)
-    parser.add_argument('--alpha', type=float, default=90.0, help='alpha_max (deg)')
-    parser.add_argument('--preset', default='feedback')
-    parser.add_argument('--jobs', type=int, default=2)
-    parser.add_argument('--out', default='out/feedback/c2_harvest')
-    args = parser.parse_args(argv)
-    try:
-        seeds = parse_seeds(args.seeds)
-    except ValueError as exc:
-        parser.error(f'--seeds: {exc}')
-    samples = harvest(seeds, args.periods, args.preset, args.alpha, args.jobs)
-    try:
-        s = summary(samples)
-    except ValueError as exc:
-        sys.stderr.write(f'smarticle-c2-harvest: {exc}\n')
-        return 1
-    touched = [x for x in samples if x.touched]
-    print(format_summary(s, summary(touched) if touched else None))
-    out = Path(args.out)
-    held = held_starts(samples)
-    print(f'\n{len(held)} starts of {len({(x.seed, x.i, x.j) for x in held})} C2 gliders held by collisions '
-          f'(touched in >= {HELD_SHARE:.0%} of their periods; every {HELD_EVERY}th period with contact): '
-          f'{out / "c2_held_starts.csv"}')
-    write_csv(held, out / 'c2_held_starts.csv')
-    print(f'wrote {write_csv(samples, out / "c2_samples.csv")} and {plot(samples, out / "c2_harvest.png")}')
-    return 0
-
-
-if __name__ == '__main__':
-    raise SystemExit(main())

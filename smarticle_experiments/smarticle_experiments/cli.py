@@ -1,14 +1,21 @@
-"""``smarticle-experiments``: list, run, report and check the paper's experiments (no ROS).
+"""``smarticle-experiments``: list, run, report and check the paper's experiments and studies (no ROS).
 
-    smarticle-experiments list [-v]
+    smarticle-experiments list [--all] [-v]
     smarticle-experiments run p1 --trials 151                    # embedded LocalCluster, one worker per core
     smarticle-experiments run p1 --scheduler tcp://HOST:8786     # an existing Dask cluster
-    smarticle-experiments run my_spec.yaml --periods 5 --trials 3
+    smarticle-experiments run my_spec.yaml --periods 5 --seeds 0..2
     smarticle-experiments report p1
+    smarticle-experiments report --summary                       # the status table of the paper's claims
     smarticle-experiments status p1
+    smarticle-experiments p6 --seeds 0..39                       # P6 open loop against feedback
+    smarticle-experiments c2-harvest --seeds 5000..5019          # where the feedback robot's C2 gliders sit
+    smarticle-experiments c2-collisions --seed 1                 # every contact event of one C2 pair
+    smarticle-experiments physics-study drift --dt 240 480       # the physics study's measurements
 
-Bad input (unknown spec key, zero or negative count, empty grid, a scheduler that does not answer) prints
-one line naming the cause and exits with code 2, writing nothing.
+Every command that runs trials runs them as trial kinds on the one Dask engine (``--workers``,
+``--scheduler``) into the one store (``--out``). Bad input (unknown spec key, zero or negative count, empty
+grid, a scheduler that does not answer) prints one line naming the cause and exits with code 2, writing
+nothing.
 """
 
 from __future__ import annotations
@@ -20,15 +27,15 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import NoReturn
 
-import yaml
+from smarticle_common.cli import add_version, closed_pipe_safe, seeds_argument
 from smarticle_sim.settings import NotConvergedWarning
 
 from .errors import ExperimentError, SchedulerError, SpecError
-from .spec import ExperimentSpec, builtin_names, load_spec, parse_seed_ranges
+from .harness import PROG, add_engine_arguments, positive_float, positive_int, run_spec
+from .spec import STATUSES, TAGS, ExperimentSpec, archive_names, builtin_names, load_spec
 from .store import DEFAULT_ROOT, ResultStore, code_version
 from .trials import KINDS
 
-PROG = 'smarticle-experiments'
 
 
 class _Parser(argparse.ArgumentParser):
@@ -40,67 +47,48 @@ class _Parser(argparse.ArgumentParser):
         raise SystemExit(2)
 
 
-def _positive_int(text: str) -> int:
-    """An integer >= 1 (argparse type)."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f'{text!r} is not a whole number') from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f'must be >= 1, got {value}')
-    return value
-
-
-def _positive_float(text: str) -> float:
-    """A finite number > 0 (argparse type)."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f'{text!r} is not a number') from None
-    if not (value > 0 and value != float('inf')):
-        raise argparse.ArgumentTypeError(f'must be > 0, got {text}')
-    return value
-
-
-def _seed_ranges(text: str) -> tuple[int, ...]:
-    """argparse type: ``1000-1029`` or ``1,5,10-12``."""
-    try:
-        return parse_seed_ranges(text)
-    except SpecError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
-
-
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser."""
+    from .commands import STUDY_COMMANDS
+
     parser = _Parser(prog=PROG, description=(__doc__ or '').split('\n')[0])
+    add_version(parser, 'smarticle_experiments')
     sub = parser.add_subparsers(dest='command', required=True, parser_class=_Parser)
-    lister = sub.add_parser('list', help='the shipped experiment specs')
+    lister = sub.add_parser('list', help='the shipped experiment specs, current ones by tag')
+    lister.add_argument('--all', action='store_true',
+                        help='also the superseded specs (and, in a source tree, the archived ones)')
     lister.add_argument('-v', '--verbose', action='store_true', help='also the trial kinds and their parameters')
     for name, text in (('run', 'run the trials the store does not hold yet'),
                        ('report', 'write report.md and PNG figures from the stored trials'),
                        ('status', 'count done, failed and missing trials')):
         p = sub.add_parser(name, help=text)
-        p.add_argument('spec', help='a shipped spec name (see list) or a YAML file')
-        p.add_argument('--trials', type=_positive_int, default=None,
+        p.add_argument('spec', nargs='?' if name == 'report' else None,
+                       help='a shipped spec name (see list) or a YAML file')
+        p.add_argument('--trials', type=positive_int, default=None,
                        help='seeds 0..N-1 per grid point instead of the spec\'s seeds')
-        p.add_argument('--seeds', type=_seed_ranges, default=None, metavar='A-B[,C,...]',
-                       help='only these seeds (e.g. 1000-1029), in the same store; the report is '
+        p.add_argument('--seeds', type=seeds_argument, default=None, metavar='SEEDS',
+                       help='only these seeds (7, 1000..1029 or 1,5,10..12), in the same store; the report is '
                             'report-<name>-seeds-<ranges>')
-        p.add_argument('--periods', type=_positive_float, default=None, help='gait periods per trial')
-        p.add_argument('--out', type=Path, default=DEFAULT_ROOT, help=f'store root (default {DEFAULT_ROOT})')
-    run = sub.choices['run']
-    run.add_argument('--scheduler', default=None, help='address of an existing Dask scheduler (tcp://HOST:8786)')
-    run.add_argument('--workers', type=_positive_int, default=None,
-                     help='LocalCluster worker processes (default: one per core)')
-    run.add_argument('--retries', type=int, default=2, help='Dask retries of a task whose machinery failed')
-    run.add_argument('--retry-failed', action='store_true', help='also rerun trials that raised before')
-    run.add_argument('--no-progress', action='store_true', help='no progress bar')
-    run.add_argument('--report', action='store_true', help='write the report after the run')
+        p.add_argument('--periods', type=positive_float, default=None, help='gait periods per trial')
+        if name == 'run':
+            add_engine_arguments(p)
+            p.add_argument('--report', action='store_true', help='write the report after the run')
+        else:
+            p.add_argument('--out', type=Path, default=DEFAULT_ROOT, help=f'store root (default {DEFAULT_ROOT})')
+    sub.choices['report'].add_argument(
+        '--summary', action='store_true',
+        help='print the status table of the paper\'s claims (one line each) from the stored current paper specs')
+    for command in STUDY_COMMANDS:
+        p = sub.add_parser(command.name, help=command.help, description=command.help)
+        command.add_arguments(p)
+        if command.runs_trials:
+            add_engine_arguments(p)
+        p.set_defaults(study=command)
     return parser
 
 
 def resolve(args: argparse.Namespace) -> ExperimentSpec:
-    """The spec named on the command line with --trials / --periods applied."""
+    """The spec named on the command line with --trials / --seeds / --periods applied."""
     spec = load_spec(args.spec)
     if args.trials is not None and args.seeds is not None:
         raise SpecError('--trials and --seeds both choose the seeds: give one')
@@ -113,26 +101,54 @@ def resolve(args: argparse.Namespace) -> ExperimentSpec:
     return spec
 
 
-def summary_name(spec: ExperimentSpec) -> str:
-    """``summary`` for the spec that owns its store, ``summary-<name>`` for one that shares another's."""
-    return 'summary' if spec.store == spec.name else f'summary-{spec.name}'
+def _list_line(name: str, width: int, path: str | None = None) -> str:
+    """One spec's line: name, kind, trial count, description (or why it is invalid)."""
+    try:
+        with warnings.catch_warnings(record=True) as caught:   # noted on the spec's line, not as a traceback
+            warnings.simplefilter('always', NotConvergedWarning)
+            spec = load_spec(path or name)
+        note = '  (a grid point is coarser than converges: NotConvergedWarning)' if any(
+            issubclass(w.category, NotConvergedWarning) for w in caught) else ''
+        return (f'{name:{width}s} {spec.kind:10s} {len(spec.points()) * len(spec.seeds):6d} trials  '
+                f'{spec.description}{note}')
+    except SpecError as exc:
+        return f'{name:{width}s} INVALID: {exc}'
 
 
 def cmd_list(args: argparse.Namespace) -> int:
-    """Print the shipped specs (and with -v the kinds)."""
+    """Print the current shipped specs grouped by tag (with --all the superseded and archived ones too)."""
     names = builtin_names()
     width = max(len(name) for name in names)
+    specs: dict[str, ExperimentSpec | None] = {}
     for name in names:
         try:
-            with warnings.catch_warnings(record=True) as caught:   # noted on the spec's line, not as a traceback
-                warnings.simplefilter('always', NotConvergedWarning)
-                spec = load_spec(name)
-            note = '  (a grid point is coarser than converges: NotConvergedWarning)' if any(
-                issubclass(w.category, NotConvergedWarning) for w in caught) else ''
-            print(f'{name:{width}s} {spec.kind:9s} {len(spec.points()) * len(spec.seeds):6d} trials  '
-                  f'{spec.description}{note}')
-        except SpecError as exc:
-            print(f'{name:{width}s} INVALID: {exc}')
+            with warnings.catch_warnings():
+                warnings.simplefilter('ignore', NotConvergedWarning)
+                specs[name] = load_spec(name)
+        except SpecError:
+            specs[name] = None
+    for tag in (*TAGS, ''):
+        chosen = [n for n, s in specs.items() if s is not None and s.status == 'current'
+                  and (tag in s.tags if tag else not s.tags)]
+        if chosen:
+            print(f'# {tag or "untagged"}')
+            for name in chosen:
+                print(_list_line(name, width))
+    invalid = [n for n, s in specs.items() if s is None]
+    for name in invalid:
+        print(_list_line(name, width))
+    if args.all:
+        for status in STATUSES[1:]:
+            chosen = [n for n, s in specs.items() if s is not None and s.status == status]
+            if chosen:
+                print(f'# {status}')
+                for name in chosen:
+                    print(_list_line(name, width))
+        archived = archive_names()
+        if archived:
+            print('# archived (not installed; each runs from the commit named in archive/README.md)')
+            for name in archived:
+                print(f'{name:{width}s}')
     if args.verbose:
         print('\ntrial kinds (parameters and defaults):')
         for kind, info in KINDS.items():
@@ -143,43 +159,26 @@ def cmd_list(args: argparse.Namespace) -> int:
 
 def cmd_run(args: argparse.Namespace) -> int:
     """Run a spec's missing trials and write the summary (and report)."""
-    from .engine import dask_client, run_trials
     from .report import write_report
 
     spec = resolve(args)
-    code = code_version()
-    trials = spec.trials(code)
-    store = ResultStore(args.out / spec.store)
-    if not {t.key for t in trials} - store.done(args.retry_failed):
-        summary = store.write_summary(store.records(t.key for t in trials), summary_name(spec))
-        print(f'{spec.name}: {len(trials)} trials: {len(trials)} already stored, 0 done now; summary {summary}')
-        if args.report:
-            print(f'report: {write_report(spec, trials, store, code)}')
-        return 0
-    with dask_client(args.scheduler, args.workers) as client:   # connect before writing anything
-        store.folder.mkdir(parents=True, exist_ok=True)
-        (store.folder / f'spec-{spec.name}.yaml').write_text(yaml.safe_dump(
-            {'name': spec.name, 'kind': spec.kind, 'source': spec.source, 'base': dict(spec.base),
-             'grid': [dict(b) for b in spec.grid], 'seeds': list(spec.seeds), 'code': code}, sort_keys=False))
-        workers = len(client.nthreads())
-        sys.stderr.write(f'{spec.name}: {len(trials)} trials, store {store.folder}, {workers} workers\n')
-        try:
-            stats = run_trials(trials, store, client, code, retries=args.retries, retry_failed=args.retry_failed,
-                               progress=not args.no_progress)
-        finally:   # also when interrupted: the summary of what is stored so far
-            summary = store.write_summary(store.records(t.key for t in trials), summary_name(spec))
-    print(f'{spec.name}: {stats.total} trials: {stats.skipped} already stored, {stats.ok} done now, '
-          f'{stats.failed} failed, {stats.lost} lost by the engine ({stats.wall_s:.1f} s, {stats.workers} workers); '
-          f'summary {summary}')
+    trials, store, code = run_spec(spec, args)
     if args.report:
         print(f'report: {write_report(spec, trials, store, code)}')
     return 0
 
 
 def cmd_report(args: argparse.Namespace) -> int:
-    """Write the report of a spec from its stored trials."""
-    from .report import write_report
+    """Write the report of a spec from its stored trials (or, with --summary, print the claims' status table)."""
+    from .report import status_table, write_report
 
+    if args.summary:
+        if args.spec is not None:
+            raise SpecError('report --summary reads every current paper spec: give no spec')
+        print(status_table(args.out))
+        return 0
+    if args.spec is None:
+        raise SpecError('report: name a spec (or give --summary)')
     spec = resolve(args)
     code = code_version()
     store = ResultStore(args.out / spec.store)
@@ -213,11 +212,14 @@ def cmd_status(args: argparse.Namespace) -> int:
 COMMANDS = {'list': cmd_list, 'run': cmd_run, 'report': cmd_report, 'status': cmd_status}
 
 
+@closed_pipe_safe
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; bad input exits 2 with one line on stderr."""
     args = build_parser().parse_args(argv)
     try:
-        return COMMANDS[args.command](args)
+        if args.command in COMMANDS:
+            return COMMANDS[args.command](args)
+        return int(args.study.run(args))
     except (SpecError, SchedulerError) as exc:
         sys.stderr.write(f'{PROG}: error: {exc}\n')
         return 2

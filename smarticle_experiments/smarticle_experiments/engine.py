@@ -26,7 +26,7 @@ from typing import Any
 from .errors import SchedulerError
 from .spec import Trial
 from .store import ResultStore
-from .trials import code_versions, trial_function
+from .trials import code_versions, run_kind
 
 #: Seconds to wait for an existing scheduler before giving up.
 CONNECT_TIMEOUT = 5.0
@@ -41,7 +41,7 @@ def execute_trial(kind: str, params: Mapping[str, Any], seed: int, key: str, poi
                               'code': dict(code), 'started': started,
                               'worker': {'host': socket.gethostname(), 'pid': os.getpid(), **code_versions()}}
     try:
-        record['result'] = trial_function(kind)(params, seed)
+        record['result'] = run_kind(kind, params, seed)
         record['status'] = 'ok'
     except Exception as exc:   # the trial's failure is its result: stored with its traceback
         record.update(status='failed', error_kind='trial', error=f'{type(exc).__name__}: {exc}'.split('\n')[0],

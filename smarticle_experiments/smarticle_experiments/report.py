@@ -30,9 +30,10 @@ import numpy as np
 from smarticle_sim.mujoco_engine import MujocoSettings
 from smarticle_sim.settings import BULLET_SOLVER_RESIDUAL_THRESHOLD
 
-from .spec import ExperimentSpec, Trial, seed_runs
+from .results import P6Result, SingleResult
+from .spec import ExperimentSpec, Trial, canonical, seed_runs
 from .stats import Estimate, bootstrap_mean, kaplan_meier, logrank, wilson
-from .store import ResultStore, write_atomic
+from .store import ResultStore, json_ready, write_atomic
 from .trials import MUJOCO_KINDS, config_of, ensemble_msd, msd_beta
 
 
@@ -610,10 +611,10 @@ def section_p6(ctx: Context) -> list[str]:
     condition; open loop and feedback are compared (log-rank) within a setting.
     """
     Key = tuple[tuple[tuple[str, Any], ...], float, bool]
-    groups: dict[Key, list[dict[str, Any]]] = defaultdict(list)
+    groups: dict[Key, list[P6Result]] = defaultdict(list)
     for t, r in ctx.ok():
         setting = other_grid_values(t.point, ('alpha_max_deg', 'feedback'))
-        groups[(setting, float(t.params['alpha_max_deg']), bool(t.params['feedback']))].append(r)
+        groups[(setting, float(t.params['alpha_max_deg']), bool(t.params['feedback']))].append(P6Result.from_dict(r))
     keys = sorted({k for setting, _, _ in groups for k, _ in setting})
     lines = ['| ' + ''.join(f'{k} | ' for k in keys) + 'condition | trials | reached the end | KM median lifetime '
              '(periods) [95 %] | mean lifetime +- SE | mean halts |',
@@ -629,15 +630,16 @@ def section_p6(ctx: Context) -> list[str]:
         short = f'{"fb" if feedback else "ol"} {alpha:g}' + ''.join(f' {v:g}' if isinstance(v, float) else f' {v}'
                                                                      for _, v in setting)
         labels.append(short)
-        km = kaplan_meier([r['lifetime_periods'] for r in rows], [bool(r['censored']) for r in rows])
+        km = kaplan_meier([r.lifetime_periods for r in rows], [r.censored for r in rows])
         medians[cond] = km.median
-        life = np.array([r['lifetime_periods'] for r in rows], dtype=float)
+        life = np.array([r.lifetime_periods for r in rows], dtype=float)
         se = life.std(ddof=1) / np.sqrt(life.size) if life.size > 1 else float('nan')
         lines.append('| ' + setting_cells(setting, keys)
                      + f'{label} | {len(rows)} | {km.censored} | {km.median.text(".0f")} | {life.mean():.1f} +- '
-                     f'{se:.1f} | {np.mean([r["halts"] for r in rows]):.1f} |')
+                     f'{se:.1f} | {np.mean([r.halts for r in rows]):.1f} |')
         ax1.scatter(x + np.linspace(-0.15, 0.15, life.size), life, s=12)
         ax2.step(np.r_[0, km.times], np.r_[1, km.survival], where='post', label=short if setting else label)
+    lines += p6_details_lines(order, float(ctx.spec.base.get('periods', 0.0)))
     ax1.set_xticks(range(len(order)), labels, fontsize=7, rotation=20)
     ax1.set_ylabel('C2 lifetime (periods)')
     ax2.set_xlabel('lifetime (periods)')
@@ -648,14 +650,13 @@ def section_p6(ctx: Context) -> list[str]:
         plain = groups.get((setting, alpha, False))
         if feedback and plain:
             where = ''.join(f', {k} {v}' for k, v in setting)
-            if all(r['censored'] for r in (*plain, *rows)):
+            if all(r.censored for r in (*plain, *rows)):
                 lines.append(f'\nOpen loop against feedback at {alpha:g} deg{where}: every pair reached the end, no '
                              'test.')
                 continue
-            stat, p = logrank(*(([r['lifetime_periods'] for r in g], [bool(r['censored']) for r in g])
-                                for g in (plain, rows)))
-            ratio = (np.mean([r['lifetime_periods'] for r in rows])
-                     / max(float(np.mean([r['lifetime_periods'] for r in plain])), 1e-9))
+            stat, p = logrank(*(([r.lifetime_periods for r in g], [r.censored for r in g]) for g in (plain, rows)))
+            ratio = (np.mean([r.lifetime_periods for r in rows])
+                     / max(float(np.mean([r.lifetime_periods for r in plain])), 1e-9))
             lines.append(f'\nLog-rank (censored lifetimes), open loop against feedback at {alpha:g} deg{where}: '
                          f'statistic {stat:.3f}, p = {p:.3g}; mean lifetime ratio feedback / open loop {ratio:.2f}.')
     fb = [m for (_, _, f), m in medians.items() if f]
@@ -670,6 +671,29 @@ def section_p6(ctx: Context) -> list[str]:
     return [*lines, '', '![P6 lifetimes](p6_lifetimes.png)']
 
 
+def _mean_se(values: Sequence[float]) -> str:
+    """``mean +- SE`` of some values (SE nan below two)."""
+    v = np.asarray(values, dtype=float)
+    se = v.std(ddof=1) / math.sqrt(v.size) if v.size > 1 else math.nan
+    return f'{v.mean():.2f} +- {se:.2f}'
+
+
+def p6_details_lines(order: Sequence[tuple[Any, list[P6Result]]], periods: float) -> list[str]:
+    """With the p6 kind's ``details``: each condition's travel while bound (W) and its periods with contact."""
+    rows = list(order)
+    if not rows or any(r.travel_w is None or r.contact_periods is None for _, rs in rows for r in rs):
+        return []
+    out = ['', '| condition | setting | travel while bound (W), mean +- SE | periods with contact, mean +- SE | '
+           'in the second half | final r (BL), median |', '| --- | --- | ---: | ---: | ---: | ---: |']
+    for (setting, alpha, feedback), rs in rows:
+        out.append(f'| {"feedback" if feedback else "open loop"} {alpha:g} deg | {dict(setting) or "-"} | '
+                   f'{_mean_se([r.travel_w or 0.0 for r in rs])} | '
+                   f'{_mean_se([len(r.contact_periods or []) for r in rs])} | '
+                   f'{_mean_se([sum(q >= periods / 2 for q in r.contact_periods or []) for r in rs])} | '
+                   f'{np.median([r.final_r_bl if r.final_r_bl is not None else math.nan for r in rs]):.2f} |')
+    return out
+
+
 def section_drift(ctx: Context) -> list[str]:
     """P7: single-robot drift per cycle (um), bootstrap over seeds, per amplitude and per other grid setting.
 
@@ -679,7 +703,7 @@ def section_drift(ctx: Context) -> list[str]:
     groups: dict[tuple[tuple[str, Any], ...], dict[float, list[float]]] = defaultdict(lambda: defaultdict(list))
     for t, r in ctx.ok():
         setting = other_grid_values(t.point, ('alpha_max_deg',))
-        groups[setting][float(t.params['alpha_max_deg'])].append(r['drift_um_per_cycle'])
+        groups[setting][float(t.params['alpha_max_deg'])].append(SingleResult.from_dict(r).drift_um_per_cycle)
     target = _paper(ctx, 'drift_um', 75.0)
     keys = sorted({k for setting in groups for k, _ in setting})
     lines = ['| ' + ''.join(f'{k} | ' for k in keys) + 'alpha_max (deg) | robots | drift (um / cycle) [95 %] |',
@@ -927,3 +951,67 @@ def write_report(spec: ExperimentSpec, trials: list[Trial], store: ResultStore, 
     path = folder / 'report.md'
     write_atomic(path, text)
     return path
+
+
+def _identity(kind: str, params: Mapping[str, Any], seed: int) -> str:
+    """A trial's identity without the code version: kind, parameters (as the store writes them) and seed."""
+    return canonical({'kind': kind, 'params': json_ready(params), 'seed': int(seed)})
+
+
+def stored_records(spec: ExperimentSpec, trials: Sequence[Trial], store: ResultStore) -> dict[str, dict[str, Any]]:
+    """The newest stored record of each of ``trials`` under the trial's key, whatever code version ran it
+    (the status of a claim is the last run of its spec)."""
+    newest: dict[str, dict[str, Any]] = {}
+    for record in store.records():
+        ident = _identity(str(record.get('kind')), record.get('params') or {}, int(record.get('seed', -1)))
+        if ident not in newest or float(record.get('end_unix') or 0) >= float(newest[ident].get('end_unix') or 0):
+            newest[ident] = record
+    out = {}
+    for t in trials:
+        found = newest.get(_identity(t.kind, t.params, t.seed))
+        if found is not None:
+            out[t.key] = found
+    return out
+
+
+def status_table(root: Path) -> str:
+    """The status of the paper's claims as Markdown, one line per claim: every current spec tagged ``paper``,
+    its sections' paper-against-sim rows computed from the newest stored trials under ``root``, and the
+    spec's report. A spec with no stored trial gets one 'not run' line."""
+    import tempfile
+    import warnings
+
+    from smarticle_sim.settings import NotConvergedWarning
+
+    from .spec import builtin_names, load_spec
+    from .store import code_version
+
+    code = code_version()
+    lines = ['| experiment | claim | paper | sim [95 % interval] | paper inside | trials used | report |',
+             '| --- | --- | --- | --- | --- | ---: | --- |']
+    for name in builtin_names():
+        with warnings.catch_warnings():
+            warnings.simplefilter('ignore', NotConvergedWarning)
+            spec = load_spec(name)
+        if spec.status != 'current' or 'paper' not in spec.tags:
+            continue
+        store = ResultStore(root / spec.store)
+        trials = spec.trials(code)
+        records = stored_records(spec, trials, store)
+        link = f'[report-{spec.name}]({store.folder / f"report-{spec.name}" / "report.md"})'
+        if not records:
+            lines.append(f'| {spec.name} | {spec.description} | - | not run | n/a | 0 | `smarticle-experiments run '
+                         f'{spec.name}` |')
+            continue
+        with tempfile.TemporaryDirectory() as tmp:
+            ctx = Context(spec, trials, records, Path(tmp))
+            for section in spec.report:
+                SECTIONS[section](ctx)
+        used = len(ctx.ok())
+        if not ctx.comparisons:
+            lines.append(f'| {spec.name} | {spec.description} | - | see report | n/a | {used} of {len(trials)} | '
+                         f'{link} |')
+        for c in ctx.comparisons:
+            lines.append(f'| {spec.name} | {c.quantity} | {c.paper} | {c.sim_text} | {_yes_no(c.inside)} | '
+                         f'{used} of {len(trials)} | {link} |')
+    return '\n'.join(lines)

@@ -4,6 +4,8 @@ A spec file is a mapping with these keys (every other key is refused, naming it)
 
     name: p1                      # required; also the default store folder
     description: one line
+    tags: [paper]                 # what it is for: paper, benchmark, calibration, diagnostic (``TAGS``)
+    status: current               # current or superseded (``list`` shows current specs, ``list --all`` all)
     kind: dense                   # trial kind (trials.KINDS) or a user's importable module:function
     store: p1                     # optional store folder (specs that share trials share a store)
     preset: small                 # robot preset
@@ -16,7 +18,7 @@ A spec file is a mapping with these keys (every other key is refused, naming it)
     analysis: {min_periods: 30}   # the kind's in-trial analysis parameters (same namespace as params)
     grid: {theta_deg: [0, 30]}    # parameter -> list of values; the trials are the product x seeds
                                   # (or a list of such blocks: the union of their products)
-    seeds: 151                    # a count (0..n-1), a list, or {start: 0, count: 151}
+    seeds: 151                    # a count (0..n-1), a list, {start: 0, count: 151} or '1000..1150'
     report: [p1, trajectories]    # report sections (report.SECTIONS)
     paper: {fraction: 0.64}       # the paper's values the report sections compare with
 
@@ -39,16 +41,21 @@ from typing import Any
 import yaml
 
 from .errors import SpecError
-from .trials import (KINDS, MUJOCO_FIELDS, NOISE_FIELDS, PHYSICS_FIELDS, ROBOT_FIELDS, noise_mapping, resolve_kind,
-                     validate_params)
+from .configs import MUJOCO_FIELDS, NOISE_FIELDS, PHYSICS_FIELDS, ROBOT_FIELDS, noise_mapping
+from .trials import KINDS, resolve_kind, validate_params
 
 #: The sections a spec's ``report`` may name (``report.SECTIONS`` draws each; a test keeps the two equal).
 REPORT_SECTIONS: tuple[str, ...] = ('p1', 'trajectories', 'configurations', 'lifetimes', 'basin', 'alpha_sweep',
                                     'p6', 'drift', 'accuracy', 'contacts', 'step_convergence',
                                     'pair_paths')
 
-SPEC_KEYS: tuple[str, ...] = ('name', 'description', 'kind', 'store', 'preset', 'periods', 'physics', 'robot',
-                              'noise', 'params', 'analysis', 'grid', 'seeds', 'report', 'paper')
+SPEC_KEYS: tuple[str, ...] = ('name', 'description', 'tags', 'status', 'kind', 'store', 'preset', 'periods',
+                              'physics', 'robot', 'noise', 'params', 'analysis', 'grid', 'seeds', 'report', 'paper')
+#: What a spec is for (``tags``): one of the paper's experiments, a speed or accuracy benchmark, a
+#: calibration of the sim against the paper, or a diagnostic of one question about the physics.
+TAGS: tuple[str, ...] = ('paper', 'benchmark', 'calibration', 'diagnostic')
+#: A spec's ``status``: current (``list`` shows it) or superseded by another spec (``list --all``).
+STATUSES: tuple[str, ...] = ('current', 'superseded')
 
 
 @dataclass(frozen=True)
@@ -72,6 +79,8 @@ class ExperimentSpec:
     grid: tuple[Mapping[str, Sequence[Any]], ...]   # blocks; the points are the union of their products
     seeds: tuple[int, ...]
     description: str = ''
+    tags: tuple[str, ...] = ()
+    status: str = 'current'
     store: str = ''
     report: tuple[str, ...] = ()
     paper: Mapping[str, Any] = field(default_factory=dict)
@@ -128,23 +137,6 @@ def seed_runs(seeds: Sequence[int]) -> list[tuple[int, int]]:
         else:
             runs.append([seed, seed])
     return [(a, b) for a, b in runs]
-
-
-def parse_seed_ranges(text: str) -> tuple[int, ...]:
-    """``1000-1029`` or ``1,5,10-12`` as seeds; SpecError naming the part that is not a seed or a range."""
-    seeds: list[int] = []
-    for part in text.split(','):
-        part = part.strip()
-        low, sep, high = part.partition('-')
-        try:
-            a = int(low)
-            b = int(high) if sep else a
-        except ValueError:
-            raise SpecError(f'--seeds: {part!r} is not a seed or a range A-B of seeds') from None
-        if a < 0 or b < a:
-            raise SpecError(f'--seeds: {part!r} is not a range of seeds >= 0 (A-B with A <= B)')
-        seeds += range(a, b + 1)
-    return tuple(seeds)
 
 
 def _replace(spec: ExperimentSpec, **changes: Any) -> ExperimentSpec:
@@ -225,8 +217,9 @@ def _grid_block(name: str, kind: str, known: Any, block: Mapping[str, Any]) -> d
     return grid
 
 
-def parse_seeds(name: str, value: Any) -> tuple[int, ...]:
-    """Seeds from a count, a list or {start, count}; SpecError for zero, negative or non-integers."""
+def spec_seeds(name: str, value: Any) -> tuple[int, ...]:
+    """Seeds from a count, a list, {start, count} or the stack's seed syntax as text ('1000..1029',
+    ``smarticle_common.cli.parse_seeds``); SpecError for zero, negative or non-integers."""
     def whole(v: Any, what: str, low: int) -> int:
         if isinstance(v, bool) or not isinstance(v, int) or v < low:
             raise SpecError(f'{name}: {what} must be a whole number >= {low}, got {v!r}')
@@ -234,6 +227,13 @@ def parse_seeds(name: str, value: Any) -> tuple[int, ...]:
 
     if value is None:
         return (0,)
+    if isinstance(value, str):
+        from smarticle_common.cli import SeedSyntaxError, parse_seeds
+
+        try:
+            return tuple(parse_seeds(value))
+        except SeedSyntaxError as exc:
+            raise SpecError(f'{name}: {exc}') from None
     if isinstance(value, Mapping):
         extra = sorted(set(value) - {'start', 'count'})
         if extra:
@@ -311,7 +311,7 @@ def spec_from_mapping(data: Any, source: str = '') -> ExperimentSpec:
     if isinstance(raw, list) and not raw:
         raise SpecError(f'{name}: grid is an empty list: the grid expands to no trials')
     grid = tuple(_grid_block(name, kind, known, _mapping(name, 'grid', block)) for block in blocks)
-    seeds = parse_seeds(name, data.get('seeds'))
+    seeds = spec_seeds(name, data.get('seeds'))
     report = data.get('report') or []
     if not isinstance(report, list) or not all(isinstance(r, str) for r in report):
         raise SpecError(f'{name}: report must be a list of section names')
@@ -322,8 +322,15 @@ def spec_from_mapping(data: Any, source: str = '') -> ExperimentSpec:
     store = data.get('store', name)
     if not isinstance(store, str) or not store or any(c in store for c in '/\\ '):
         raise SpecError(f'{name}: store must be a folder name, got {store!r}')
+    tags = data.get('tags') or []
+    if not isinstance(tags, list) or any(t not in TAGS for t in tags):
+        raise SpecError(f'{name}: tags must be a list of {", ".join(TAGS)}, got {tags!r}')
+    status = data.get('status', 'current')
+    if status not in STATUSES:
+        raise SpecError(f'{name}: status must be one of {", ".join(STATUSES)}, got {status!r}')
     spec = ExperimentSpec(name=name, kind=kind, base=base, grid=grid, seeds=seeds,
-                          description=str(data.get('description', '')), store=store, report=tuple(report),
+                          description=str(data.get('description', '')), tags=tuple(tags), status=str(status),
+                          store=store, report=tuple(report),
                           paper=paper, source=source)
     if 'periods' in base:
         _check_positive(name, 'periods', base['periods'])
@@ -347,6 +354,19 @@ def builtin_dir() -> Path:
         return Path(get_package_share_directory('smarticle_experiments')) / 'config' / 'experiments'
     except (ImportError, LookupError, ValueError):
         return here
+
+
+def archive_dir() -> Path | None:
+    """The archive of superseded specs in a source tree (``archive/specs`` at the repository root; not
+    installed), or None."""
+    here = Path(__file__).resolve().parents[2] / 'archive' / 'specs'
+    return here if here.is_dir() else None
+
+
+def archive_names() -> list[str]:
+    """Names of the archived specs of a source tree (empty when installed)."""
+    folder = archive_dir()
+    return sorted(p.stem for p in folder.glob('*.yaml')) if folder else []
 
 
 def builtin_names() -> list[str]:

@@ -62,12 +62,12 @@ def code_version() -> dict[str, str]:
     return {'smarticle_experiments': __version__, 'commit': git_commit(), **code_versions()}
 
 
-def _clean(value: Any) -> Any:
+def json_ready(value: Any) -> Any:
     """JSON-ready copy: NaN / inf floats become None, tuples lists, numpy scalars Python numbers."""
     if isinstance(value, Mapping):
-        return {str(k): _clean(v) for k, v in value.items()}
+        return {str(k): json_ready(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [_clean(v) for v in value]
+        return [json_ready(v) for v in value]
     if hasattr(value, 'item') and callable(value.item) and getattr(value, 'ndim', 1) == 0:
         value = value.item()
     if isinstance(value, float) and not math.isfinite(value):
@@ -105,7 +105,7 @@ class ResultStore:
         """Store one trial record (must carry 'key') atomically; return its path."""
         path = self.path_of(str(record['key']))
         try:
-            write_atomic(path, json.dumps(_clean(record), sort_keys=True, allow_nan=False))
+            write_atomic(path, json.dumps(json_ready(record), sort_keys=True, allow_nan=False))
         except OSError as exc:
             raise StoreError(f'cannot write {path}: {exc}') from None
         return path

@@ -1,10 +1,13 @@
-"""The trial kinds: pure functions of (params, seed) that run one trial and return a compact result.
+"""The registry of trial kinds (``KINDS``): pure functions of (params, seed) that run one trial and return a
+compact result. Every study of the package is a kind here, run by the one engine into the one store.
 
-This is the only module of the package that imports the other smarticle packages (sim, tracking,
-feedback, driver), so a refactor of those needs only these imports re-pointed.
+The other smarticle packages (sim, tracking, feedback) are imported by this module, ``configs`` and the
+study modules its kinds call (``p6``, ``c2_harvest``, ``physics_study``), never by the engine, store,
+statistics or report.
 
 A trial function takes the merged parameter mapping of one trial (``KINDS[kind].defaults`` overridden by
-the spec) and its seed, and returns a JSON-ready dict; it never reads or writes shared state. Lengths in
+the spec) and its seed, and returns a typed result (``results.TrialResult``) or a JSON-ready dict; it
+never reads or writes shared state. Lengths in
 the results are in body lengths (``_bl``) or in W (``_w``, W = BL for the smarticle), angles in degrees
 (``_deg``), speeds as stated. ``trouble`` is the SimTrouble message that ended the trial early ('' if
 none): such a trial still returns what it measured, and the report counts and lists it.
@@ -19,80 +22,31 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
-from smarticle_common.gait import GaitConfig
 from smarticle_sim.batch import Recording, run_trial
 from smarticle_sim.errors import SceneError, SimError
 from smarticle_sim.runner import ContactPeriods
 from smarticle_sim.mujoco_engine import MujocoSettings, run_mujoco
 from smarticle_sim.scenes import RobotPlacement, Scene, dense_scene, pair_scene
-from smarticle_sim.settings import NoiseConfig, PhysicsConfig, RobotSpec, SimConfig, robot_preset
+from smarticle_sim.settings import NoiseConfig, SimConfig
 from smarticle_tracking.gliders import Glider, GliderConfig, analyse_gliders
 from smarticle_tracking.msd import fit_msd_exponent, msd
 
+from . import physics_study
+from .configs import (config_of, make_config, make_gait,
+                      noise_mapping)
 from .errors import SpecError
+from .results import (C2HarvestResult, DenseResult, InadmissiblePairResult, P6Result, PairResult, SingleResult,
+                      TrialResult)
 
-TrialFunction = Callable[[Mapping[str, Any], int], dict[str, Any]]
+#: A trial kind's function: (merged parameters, seed) -> a typed result (or a JSON-ready dict).
+TrialFunction = Callable[[Mapping[str, Any], int], 'TrialResult | dict[str, Any]']
 
-#: PhysicsConfig and RobotSpec field names a spec may override (``physics:`` and ``robot:`` mappings).
-PHYSICS_FIELDS: frozenset[str] = frozenset(f.name for f in fields(PhysicsConfig))
-ROBOT_FIELDS: frozenset[str] = frozenset(f.name for f in fields(RobotSpec)) - {'name'}
-#: NoiseConfig field names a spec may set (``noise:`` mapping; unset fields are off, ``NoiseConfig.none()``).
-NOISE_FIELDS: frozenset[str] = frozenset(f.name for f in fields(NoiseConfig))
 #: The trial kinds stepped by MuJoCo (``smarticle_sim.mujoco_engine``) instead of Bullet.
 MUJOCO_KINDS: frozenset[str] = frozenset({'pair_mujoco', 'single_mujoco'})
-
-#: MujocoSettings field names the MuJoCo kinds take (``params: {mujoco: {...}}`` or grid keys ``mujoco.X``).
-MUJOCO_FIELDS: frozenset[str] = frozenset(f.name for f in fields(MujocoSettings))
-
-
-def noise_mapping(value: Any) -> dict[str, Any]:
-    """A spec's ``noise:`` value as NoiseConfig overrides: 'paper' (the cited figures), 'none' / {} / None
-    (off) or a mapping of NoiseConfig fields (the unset ones off). 'paper' is written out field by field,
-    so the trial key records the values, not the name."""
-    if value is None or value == 'none':
-        return {}
-    if value == 'paper':
-        paper = NoiseConfig.paper()
-        return {name: getattr(paper, name) for name in ('clock_rate_sd', 'servo_jitter', 'friction_sd',
-                                                         'friction_length')}
-    if not isinstance(value, Mapping):
-        raise SpecError(f"noise must be 'paper', 'none' or a mapping of NoiseConfig fields, got {value!r}")
-    unknown = sorted(set(value) - NOISE_FIELDS)
-    if unknown:
-        raise SpecError(f'noise.{unknown[0]} is not a NoiseConfig field; known: {", ".join(sorted(NOISE_FIELDS))}')
-    return dict(value)
-
-
-def make_config(preset: str, physics: Mapping[str, Any], robot: Mapping[str, Any],
-                noise: Mapping[str, Any] | None = None) -> SimConfig:
-    """The project's default SimConfig for ``preset`` with PhysicsConfig / RobotSpec overrides and the noise
-    sources of ``noise`` (NoiseConfig fields; every source not named is off), all validated."""
-    unknown = sorted(set(physics) - PHYSICS_FIELDS)
-    if unknown:
-        raise SpecError(f'physics.{unknown[0]} is not a PhysicsConfig field; '
-                        f'known: {", ".join(sorted(PHYSICS_FIELDS))}')
-    unknown = sorted(set(robot) - ROBOT_FIELDS)
-    if unknown:
-        raise SpecError(f'robot.{unknown[0]} is not a RobotSpec field; known: {", ".join(sorted(ROBOT_FIELDS))}')
-    return SimConfig(replace(robot_preset(preset), **robot), replace(PhysicsConfig(), **physics),
-                     replace(NoiseConfig.none(), **noise_mapping(noise)))
-
-
-def make_gait(config: SimConfig, alpha_max_deg: float, servo_speed: float | None = None,
-              phase: float = 0.0) -> GaitConfig:
-    """The square gait at ``alpha_max_deg`` (servo speed: given, else the robot's)."""
-    return GaitConfig.from_degrees(float(alpha_max_deg), servo_speed=servo_speed or config.robot.servo_speed,
-                                   phase=phase)
-
-
-def config_of(p: Mapping[str, Any]) -> SimConfig:
-    """SimConfig of a trial's parameters."""
-    return make_config(str(p['preset']), dict(p.get('physics') or {}), dict(p.get('robot') or {}),
-                       dict(p.get('noise') or {}))
 
 
 # ------------------------------------------------------------------ glider measurements
@@ -154,7 +108,7 @@ def analyse_recording(config: SimConfig, rec: Recording, period: float, p: Mappi
 # ------------------------------------------------------------------ trial kinds
 
 
-def dense_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+def dense_trial(p: Mapping[str, Any], seed: int) -> DenseResult:
     """P1/P2/P3: N robots densely packed, in phase (or jittered), for ``periods`` periods; its gliders."""
     config = config_of(p)
     gait = make_gait(config, p['alpha_max_deg'], p['servo_speed'])
@@ -165,7 +119,7 @@ def dense_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
     result = analyse_recording(config, rec, gait.period, p)
     if watch is not None:
         add_contact_fractions(result['gliders'], watch.periods)
-    return result
+    return DenseResult(**result)
 
 
 def add_contact_fractions(gliders: Sequence[dict[str, Any]], periods: Mapping[tuple[int, int], set[int]]) -> None:
@@ -195,19 +149,19 @@ def _tail(flags: Sequence[bool]) -> int:
     return tail
 
 
-def pair_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+def pair_trial(p: Mapping[str, Any], seed: int) -> PairResult | InadmissiblePairResult:
     """P4/P5: two robots from pair coordinates; binding at the end, travel, and the pair's gliders."""
     return _pair(p, seed, mujoco=False)
 
 
-def pair_mujoco_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+def pair_mujoco_trial(p: Mapping[str, Any], seed: int) -> PairResult | InadmissiblePairResult:
     """The pair kind's trial stepped by MuJoCo instead of Bullet (``smarticle_sim.mujoco_engine``): the same
     robots, start and gait; soft contacts with an isotropic friction cone. ``mujoco`` sets ``MujocoSettings``
     fields. A period counts as colliding if the robots touched at any servo update (1/960 s) in it."""
     return _pair(p, seed, mujoco=True)
 
 
-def _pair(p: Mapping[str, Any], seed: int, mujoco: bool) -> dict[str, Any]:
+def _pair(p: Mapping[str, Any], seed: int, mujoco: bool) -> PairResult | InadmissiblePairResult:
     """The pair kind in either engine."""
     config = config_of(p)
     gait = make_gait(config, p['alpha_max_deg'], p['servo_speed'])
@@ -218,7 +172,7 @@ def _pair(p: Mapping[str, Any], seed: int, mujoco: bool) -> dict[str, Any]:
                            (0.0, float(p['phase2'])), seed=seed,
                            alpha_max2=gait.alpha_max + math.radians(float(p['alpha2_delta_deg'])))
     except SceneError as exc:
-        return {**start, 'admissible': False, 'why': str(exc), 'trouble': '', 'gliders': []}
+        return InadmissiblePairResult(**start, admissible=False, why=str(exc), trouble='', gliders=[])
     per = max(1, round(gait.period / (config.physics.control_tick * int(p['sample_every']))))
     if mujoco:
         rec = run_mujoco(config, scene, float(p['periods']), int(p['sample_every']),
@@ -247,20 +201,20 @@ def _pair(p: Mapping[str, Any], seed: int, mujoco: bool) -> dict[str, Any]:
                out_of_reach_at_end=bool(r_all[-1] * bl > 2.0 * config.robot.reach),
                late_w=float(np.linalg.norm(com[-1] - com[len(com) // 2])) if len(com) else 0.0,
                r_end_bl=float(r_all[-1]), phi_end_deg=math.degrees(phi_end))
-    return out
+    return PairResult(**out)
 
 
-def single_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+def single_trial(p: Mapping[str, Any], seed: int) -> SingleResult:
     """P7: one robot alone (heading drawn from the seed); drift per cycle in micrometres."""
     return _single(p, seed, mujoco=False)
 
 
-def single_mujoco_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+def single_mujoco_trial(p: Mapping[str, Any], seed: int) -> SingleResult:
     """The single kind's trial stepped by MuJoCo (``mujoco`` sets ``MujocoSettings`` fields)."""
     return _single(p, seed, mujoco=True)
 
 
-def _single(p: Mapping[str, Any], seed: int, mujoco: bool) -> dict[str, Any]:
+def _single(p: Mapping[str, Any], seed: int, mujoco: bool) -> SingleResult:
     """The single kind in either engine."""
     config = config_of(p)
     gait = make_gait(config, p['alpha_max_deg'], p['servo_speed'])
@@ -276,27 +230,44 @@ def _single(p: Mapping[str, Any], seed: int, mujoco: bool) -> dict[str, Any]:
     xy = rec.poses[::per, 0, :2]
     cycles = max(len(xy) - 1, 1)
     steps = np.linalg.norm(np.diff(xy, axis=0), axis=1)
-    return {'heading_deg': math.degrees(heading), 'trouble': rec.trouble, 'cycles': len(xy) - 1,
-            'drift_um_per_cycle': float(np.linalg.norm(xy[-1] - xy[0]) / cycles * 1e6),
-            'step_um_per_cycle': float(steps.mean() * 1e6) if steps.size else None}
+    return SingleResult(heading_deg=math.degrees(heading), trouble=rec.trouble, cycles=len(xy) - 1,
+                        drift_um_per_cycle=float(np.linalg.norm(xy[-1] - xy[0]) / cycles * 1e6),
+                        step_um_per_cycle=float(steps.mean() * 1e6) if steps.size else None)
 
 
-def p6_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+def p6_trial(p: Mapping[str, Any], seed: int) -> P6Result:
     """P6: a C2 pair of the feedback robot, open loop or with impact-halt feedback (the feedback package's trial).
 
     ``physics`` / ``robot`` replace fields of the feedback preset's PhysicsConfig / RobotSpec (a spec's
-    ``physics:`` / ``robot:`` or grid keys ``physics.X`` / ``robot.X``).
+    ``physics:`` / ``robot:`` or grid keys ``physics.X`` / ``robot.X``); ``windows`` (feedback parameters,
+    ``p6.window_values``) replaces the shipped impact windows; ``details`` adds the bound run's travel and
+    the periods with contact (a step hook: the trajectory is the same).
     """
-    from smarticle_experiments.p6 import Condition, run_pair_trial, start_base
+    from smarticle_experiments.p6 import Condition, run_pair_trial, start_base, windows_config
 
     noise = replace(NoiseConfig.none(), **noise_mapping(p.get('noise'))) if p.get('noise') else None
+    details = bool(p.get('details'))
     trial = run_pair_trial(Condition(float(p['alpha_max_deg']), bool(p['feedback'])), seed, float(p['periods']),
-                           base=start_base(str(p['start'])), noise=noise,
+                           feedback=windows_config(p['windows']) if p.get('windows') else None,
+                           base=start_base(str(p['start'])), noise=noise, count_contacts=details,
                            robot_changes=dict(p.get('robot') or {}), physics_changes=dict(p.get('physics') or {}))
-    return {'lifetime_periods': int(trial.lifetime_periods), 'censored': bool(trial.censored),
-            'halts': len(trial.halts), 'trouble': trial.trouble,
-            'r0_bl': trial.start[0], 'theta0_deg': trial.start[1], 'phi0_deg': trial.start[2],
-            'final_r_bl': _finite(float(trial.r[-1])) if len(trial.r) else None}
+    return P6Result(lifetime_periods=int(trial.lifetime_periods), censored=bool(trial.censored),
+                    halts=len(trial.halts), trouble=trial.trouble, r0_bl=trial.start[0], theta0_deg=trial.start[1],
+                    phi0_deg=trial.start[2], final_r_bl=_finite(float(trial.r[-1])) if len(trial.r) else None,
+                    travel_w=trial.travel_w if details else None,
+                    contact_periods=[int(q) for q in trial.contact_periods] if details else None)
+
+
+def c2_harvest_trial(p: Mapping[str, Any], seed: int) -> C2HarvestResult:
+    """A dense open-loop trial of the feedback robot (in phase, as the paper's collectives start): every C2
+    glider of at least ``min_periods`` sampled at its period boundaries after ``settle`` periods, with the
+    pair's full state (``c2_harvest.harvest_trial``)."""
+    from smarticle_experiments.c2_harvest import harvest_recording, sample_record
+
+    samples, trouble = harvest_recording(seed, float(p['periods']), str(p['preset']), float(p['alpha_max_deg']),
+                            int(p['robots']), int(p['min_periods']), int(p['settle']), int(p['sample_every']))
+    return C2HarvestResult(samples=[sample_record(s) for s in samples],
+                           gliders=len({(s.seed, min(s.i, s.j), max(s.i, s.j)) for s in samples}), trouble=trouble)
 
 
 def accuracy_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
@@ -326,9 +297,9 @@ def accuracy_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
             else None
     out['r_mean_bl'] = float(np.mean(np.hypot(*(rec.poses[:, 1, :2] - rec.poses[:, 0, :2]).T))) / bl
     single = single_trial({**p, 'physics': physics, 'periods': p['single_periods'], 'sample_every': 1}, seed)
-    out['drift_um_per_cycle'] = single['drift_um_per_cycle']
-    if single['trouble']:
-        out['trouble'] = '; '.join(t for t in (out['trouble'], single['trouble']) if t)
+    out['drift_um_per_cycle'] = single.drift_um_per_cycle
+    if single.trouble:
+        out['trouble'] = '; '.join(t for t in (out['trouble'], single.trouble) if t)
     return out
 
 
@@ -354,6 +325,9 @@ _PAIR: dict[str, Any] = {**_COMMON, **_GLIDERS, 'periods': 75.0, 'r_bl': 1.3, 't
                          'phase2': 0.0, 'start_jitter': [0.0, 0.0, 0.0], 'sample_every': 2, 'min_periods': 10,
                          'bound_tail': 5, 'alpha2_delta_deg': 0.0}
 
+#: The physics study's kinds: flat ``settings`` (physics_study.split_settings) and a ``label`` for its tables.
+_STUDY: dict[str, Any] = {'settings': {}, 'label': 'shipped'}
+
 KINDS: dict[str, TrialKind] = {
     'dense': TrialKind(dense_trial, {**_COMMON, **_GLIDERS, 'robots': 7, 'phase_jitter': 0.0, 'sample_every': 4,
                                      'contacts': False},
@@ -366,8 +340,28 @@ KINDS: dict[str, TrialKind] = {
     'single_mujoco': TrialKind(single_mujoco_trial, {**_COMMON, 'periods': 20.0, 'sample_every': 1, 'mujoco': {}},
                                'the single kind stepped by MuJoCo (cross-engine check)'),
     'p6': TrialKind(p6_trial, {'periods': 100.0, 'alpha_max_deg': 90.0, 'feedback': False, 'start': 'harvested',
-                               'physics': {}, 'robot': {}},
+                               'physics': {}, 'robot': {}, 'windows': {}, 'details': False},
                     'C2 pair of the feedback robot, open loop or feedback (P6; smarticle_experiments.p6)'),
+    'c2_harvest': TrialKind(c2_harvest_trial, {'periods': 150.0, 'preset': 'feedback', 'alpha_max_deg': 90.0,
+                                               'robots': 7, 'min_periods': 30, 'settle': 5, 'sample_every': 4},
+                            'dense open-loop feedback robots: where their C2 gliders sit (smarticle_experiments.'
+                            'c2_harvest)'),
+    'study_collision': TrialKind(physics_study.study_collision_trial,
+                                 {**_STUDY, 'r_bl': 1.3, 'theta_deg': 150.0, 'phi_deg': 180.0, 'phase': 0.0,
+                                  'periods': 20.0},
+                                 'physics study: a pair with every contact impulse measured (collision mechanism)'),
+    'study_drift': TrialKind(physics_study.study_drift_trial,
+                             {**_STUDY, 'heading_deg': 90.0, 'alpha_max_deg': 90.0, 'periods': 20.0, 'skip': 2},
+                             'physics study: a lone robot\'s drift per cycle and tilt, tick by tick'),
+    'study_pair': TrialKind(physics_study.study_pair_trial,
+                            {**_STUDY, 'r_bl': 1.3, 'theta_deg': 330.0, 'phi_deg': 180.0, 'phase1': 0.0,
+                             'phase2': 0.05, 'periods': 100.0},
+                            'physics study: a pair\'s contact per period, touching run, r and travel'),
+    'study_dense': TrialKind(physics_study.study_dense_trial,
+                             {**_STUDY, 'robots': 7, 'jitter': 0.0, 'periods': 300.0, 'sample_every': 6},
+                             'physics study: dense stability (trouble, overlap) and gliders'),
+    'study_impact': TrialKind(physics_study.study_impact_trial, {**_STUDY, 'speed_m_s': 0.3, 'phases': 16},
+                              'physics study: effective restitution of head-on impacts'),
     'accuracy': TrialKind(accuracy_trial, {**_COMMON, 'periods': 20.0, 'single_periods': 10.0, 'rate_hz': 240.0,
                                            'control_tick': 1.0 / 60.0, 'solver_iterations': 50, 'r_bl': 1.4,
                                            'theta_deg': 60.0, 'phi_deg': 180.0, 'phase2': 0.5},
@@ -401,6 +395,12 @@ def trial_function(kind: str) -> TrialFunction:
     return func
 
 
+def run_kind(kind: str, params: Mapping[str, Any], seed: int) -> dict[str, Any]:
+    """Run one trial of ``kind`` and return its result in the stored form (a typed result's ``as_dict``)."""
+    result = trial_function(kind)(params, seed)
+    return result.as_dict() if isinstance(result, TrialResult) else dict(result)
+
+
 def validate_params(kind: str, params: Mapping[str, Any]) -> None:
     """Raise SpecError (ValueError) if the merged params of a built-in kind make no valid config or gait."""
     if kind not in KINDS:
@@ -412,6 +412,18 @@ def validate_params(kind: str, params: Mapping[str, Any]) -> None:
             if params['start'] not in START_NAMES:
                 raise SpecError(f'params.start must be one of {", ".join(START_NAMES)}, got {params["start"]!r}')
             replace(NoiseConfig.none(), **noise_mapping(params.get('noise')))
+            config = make_config('feedback', dict(params.get('physics') or {}), dict(params.get('robot') or {}))
+            make_gait(config, params['alpha_max_deg'])
+            if params.get('windows'):
+                from smarticle_experiments.p6 import windows_config
+
+                windows_config(params['windows'])
+            return
+        if kind.startswith('study_'):
+            physics_study.study_config(dict(params.get('settings') or {}))
+            return
+        if kind == 'c2_harvest':
+            make_gait(make_config(str(params['preset']), {}, {}), params['alpha_max_deg'])
             return
         config = config_of(params)
         if kind in MUJOCO_KINDS:

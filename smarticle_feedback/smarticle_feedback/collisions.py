@@ -75,7 +75,7 @@ def load_record(path: str | Path) -> CollisionRecord:
     with np.load(path, allow_pickle=False) as data:
         if 'kind' not in data.files or str(data['kind']) != 'collision_steps':
             raise CalibrationInputError(f'{path}: not a per-step collision record (record one with '
-                                        '`smarticle-c2-collisions`)')
+                                        '`smarticle-experiments c2-collisions`)')
         phases = data['phases']
         rates = data['clock_rates'] if 'clock_rates' in data.files else np.ones(2)   # records before noise
         return CollisionRecord(data['times'], data['fsr'], data['links'].astype(bool), data['r'],

@@ -11,7 +11,7 @@ light resting touches stay below f_min. The table shows each face too.
 Command line: ``smarticle-feedback-calibrate run.npz``.
 
 From the compression signature (the paper's way: the window of the compression collision): given a
-per-step collision record of ``smarticle-c2-collisions`` (``c2_steps.npz``), the tool cuts it into
+per-step collision record of ``smarticle-experiments c2-collisions`` (``c2_steps.npz``), the tool cuts it into
 contact events (``collisions.find_events``), and for each face proposes the window that best separates
 the peaks of the compression events (dr > 0) from those of the bracing ones (dr < 0): ``f_min`` the
 compression peak that maximises (compression caught / compression) - (bracing caught / bracing) on that
@@ -323,7 +323,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of `smarticle-feedback-calibrate`: table on stdout, PNG next to the input (or --png)."""
     parser = argparse.ArgumentParser(prog='smarticle-feedback-calibrate', description=__doc__.split('\n')[0])
     parser.add_argument('recording', nargs='+',
-                        help='c2_steps.npz of `smarticle-c2-collisions` (several are pooled; per-face windows from the '
+                        help='c2_steps.npz of `smarticle-experiments c2-collisions` (several are pooled; per-face '
+                        'windows from the '
                         'compression signature), or an npz of `smarticle-sim run ... --fsr` (percentile window)')
     parser.add_argument('--png', help='figure path (default: <recording>_window.png)')
     parser.add_argument('--floor', type=float, default=DEFAULT_FLOOR, help='ignore forces below this (N)')
@@ -341,7 +342,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             return 2
     if len(args.recording) > 1:
         sys.stderr.write('smarticle-feedback-calibrate: several recordings are pooled only for per-step collision '
-                         'records (smarticle-c2-collisions)\n')
+                         'records (smarticle-experiments c2-collisions)\n')
         return 2
     args.recording = args.recording[0]
     try:

@@ -21,9 +21,9 @@ from .errors import FeedbackConfigError
 NODE_NAME = 'feedback'
 
 #: Default impact windows (f_min N, f_max N, enabled) per face, from `smarticle-feedback-calibrate` on the
-#: compression signature of the P6 C2 pair (the harvested start with the cited noise; `smarticle-c2-collisions
-#: --seed S --periods 150`, seeds 1-5 pooled: the enabled faces catch 42 of 118 compression events and 0 of
-#: 66 bracing ones; held out, seeds 6 and 7: 3 of 5 and 2 of 4 compression, 0 bracing; docs/feedback.md).
+#: compression signature of the P6 C2 pair (the harvested start with the cited noise; `smarticle-experiments
+#: c2-collisions --seed S --periods 150`, seeds 1-5 pooled: the enabled faces catch 42 of 118 compression events
+#: and 0 of 66 bracing ones; held out, seeds 6 and 7: 3 of 5 and 2 of 4 compression, 0 bracing; docs/feedback.md).
 #: arm1_back and arm2_front separate compression from bracing by less than the tool's 0.3 (6 of 48 and
 #: 5 of 16 compression caught): disabled.
 DEFAULT_WINDOWS: dict[str, tuple[float, float, bool]] = {

@@ -11,7 +11,7 @@ import warnings
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
-from smarticle_common.errors import SpecError
+from smarticle_common.errors import RobotSpecError
 from smarticle_common.facts import SMALL, RobotSpec, require_non_negative, require_positive, robot_preset
 
 from .errors import ConfigError
@@ -436,7 +436,7 @@ class SimConfig:
                               f'known: {", ".join(sorted(known))}')
         try:
             robot = robot_preset(preset)
-        except SpecError as err:
+        except RobotSpecError as err:
             raise ConfigError(str(err)) from None
         return cls(robot, PhysicsConfig(**physics))
 

@@ -35,7 +35,7 @@ class TrackerInputError(TrackerError):
     """A camera frame the tracker cannot use (encoding, size, shape)."""
 
 
-class CalibrationError(TrackerError):
+class CameraCalibrationError(TrackerError):
     """A missing, unreadable or unusable plane-homography calibration."""
 
 

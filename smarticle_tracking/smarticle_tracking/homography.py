@@ -28,7 +28,7 @@ import numpy as np
 import yaml
 from numpy.typing import NDArray
 
-from .errors import CalibrationError
+from .errors import CameraCalibrationError
 
 FloatArray = NDArray[np.float64]
 SECTION = 'overhead_calibration'
@@ -48,9 +48,9 @@ class Calibration:
     def __post_init__(self) -> None:
         h = np.asarray(self.homography, dtype=float)
         if h.shape != (3, 3) or not np.all(np.isfinite(h)) or abs(np.linalg.det(h)) < 1e-300:
-            raise CalibrationError(f'homography must be a finite, invertible 3x3 matrix, got {h.tolist()!r}')
+            raise CameraCalibrationError(f'homography must be a finite, invertible 3x3 matrix, got {h.tolist()!r}')
         if not all(isinstance(v, int) and not isinstance(v, bool) and v > 0 for v in (self.width, self.height)):
-            raise CalibrationError(f'calibration image size must be positive whole pixels, got '
+            raise CameraCalibrationError(f'calibration image size must be positive whole pixels, got '
                                    f'{self.width!r} x {self.height!r}')
         object.__setattr__(self, 'homography', h)
 
@@ -76,12 +76,12 @@ def fit_homography(pixels: FloatArray, arena: FloatArray) -> tuple[FloatArray, f
     src = np.asarray(pixels, dtype=np.float64).reshape(-1, 2)
     dst = np.asarray(arena, dtype=np.float64).reshape(-1, 2)
     if src.shape != dst.shape or len(src) < 4:
-        raise CalibrationError(f'need at least 4 matched points, got {len(src)} pixel and {len(dst)} arena')
+        raise CameraCalibrationError(f'need at least 4 matched points, got {len(src)} pixel and {len(dst)} arena')
     # normalise the arena side to pixel-like magnitudes for a well-conditioned DLT
     scale = 1000.0
     h, _ = cv2.findHomography(src, dst * scale, 0)
     if h is None:
-        raise CalibrationError('the points do not determine a homography (collinear or repeated?)')
+        raise CameraCalibrationError('the points do not determine a homography (collinear or repeated?)')
     h = np.diag([1.0 / scale, 1.0 / scale, 1.0]) @ h
     mapped = cv2.perspectiveTransform(src.reshape(-1, 1, 2), h).reshape(-1, 2)
     rms = float(np.sqrt(np.mean(np.sum((mapped - dst) ** 2, axis=1))))
@@ -99,7 +99,7 @@ def calibrate(pixel_corners: FloatArray, ids: NDArray[np.int64], targets: Mappin
     ids_list = [int(t) for t in np.asarray(ids).ravel()]
     used = [m for m, t in enumerate(ids_list) if t in targets and ids_list.count(t) == 1]
     if len(used) < 2:
-        raise CalibrationError(f'found {len(used)} of the {len(targets)} calibration tags '
+        raise CameraCalibrationError(f'found {len(used)} of the {len(targets)} calibration tags '
                                f'({sorted(targets)}) in the frame (tags seen: {sorted(ids_list)}); '
                                'need at least 2 spread over the arena')
     px = np.asarray(pixel_corners, dtype=np.float64).reshape(-1, 4, 2)[used]
@@ -117,7 +117,7 @@ def board_targets(rows: int = 4, cols: int = 4, spacing: float = 0.12, first_id:
                   ) -> dict[int, tuple[float, float, float]]:
     """Tag poses of a rows x cols calibration board centred on the origin (ids from ``first_id``, heading 90 deg)."""
     if rows < 1 or cols < 1 or rows * cols < 2 or not spacing > 0.0:
-        raise CalibrationError(f'a board needs at least 2 tags and a positive spacing, got {rows}x{cols}, '
+        raise CameraCalibrationError(f'a board needs at least 2 tags and a positive spacing, got {rows}x{cols}, '
                                f'{spacing!r} m')
     out: dict[int, tuple[float, float, float]] = {}
     for r in range(rows):
@@ -143,24 +143,24 @@ def save_calibration(path: str | Path, calibration: Calibration) -> Path:
 
 
 def load_calibration(path: str | Path) -> Calibration:
-    """Read a calibration YAML; CalibrationError says what is missing or wrong and how to make one."""
+    """Read a calibration YAML; CameraCalibrationError says what is missing or wrong and how to make one."""
     source = Path(path)
     hint = 'make one with smarticle-tracker-calibrate (or smarticle-sim-camera-calibrate for the sim camera)'
     if not source.is_file():
-        raise CalibrationError(f'calibration file {str(source)!r} does not exist; {hint}')
+        raise CameraCalibrationError(f'calibration file {str(source)!r} does not exist; {hint}')
     try:
         data: Any = yaml.safe_load(source.read_text(encoding='utf-8'))
     except (OSError, yaml.YAMLError) as err:
-        raise CalibrationError(f'calibration file {str(source)!r} is not readable YAML: {err}') from err
+        raise CameraCalibrationError(f'calibration file {str(source)!r} is not readable YAML: {err}') from err
     if not isinstance(data, dict) or not isinstance(data.get(SECTION), dict):
-        raise CalibrationError(f'calibration file {str(source)!r} has no {SECTION!r} section; {hint}')
+        raise CameraCalibrationError(f'calibration file {str(source)!r} has no {SECTION!r} section; {hint}')
     body = data[SECTION]
     try:
         return Calibration(np.array(body['homography'], dtype=float), body['width'], body['height'],
                            float(body.get('rms_error', math.nan)), int(body.get('tags_used', 0)),
                            str(body.get('source', '')))
     except (KeyError, TypeError, ValueError) as err:
-        if isinstance(err, CalibrationError):
-            raise CalibrationError(f'{source}: {err}') from err
-        raise CalibrationError(f'calibration file {str(source)!r}: missing or malformed field ({err}); '
+        if isinstance(err, CameraCalibrationError):
+            raise CameraCalibrationError(f'{source}: {err}') from err
+        raise CameraCalibrationError(f'calibration file {str(source)!r}: missing or malformed field ({err}); '
                                f'{hint}') from err

@@ -14,6 +14,7 @@ from typing import Any
 
 from smarticle_common.params import ParamSpec, defaults_yaml
 
+from .errors import TrackingError
 from .homography import Calibration, load_calibration
 from .gliders import DEFAULT_ISOLATION_DISTANCE, DEFAULT_R_BIND, GliderConfig
 from .markers import RobotDims
@@ -69,7 +70,7 @@ MONITOR_PARAMS: tuple[ParamSpec, ...] = (
 )
 
 
-class SettingsError(ValueError):
+class SettingsError(TrackingError):
     """Parameter values that do not make a valid configuration."""
 
 
@@ -94,7 +95,7 @@ def tracker_config(values: dict[str, Any]) -> TrackerConfig:
 
 
 def tracker_calibration(values: dict[str, Any]) -> Calibration:
-    """Load the calibration named by the parameters (CalibrationError if missing or malformed)."""
+    """Load the calibration named by the parameters (CameraCalibrationError if missing or malformed)."""
     return load_calibration(values['calibration_file'] or SIM_CALIBRATION)
 
 

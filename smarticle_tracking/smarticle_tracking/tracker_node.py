@@ -24,7 +24,7 @@ from smarticle_common.messages import pose_message
 from smarticle_common.node import ERROR, OK, DiagnosticsPublisher, read_config, run_node
 from smarticle_common.params import ParameterError
 
-from .errors import CalibrationError, FrameEncodingError, FrameSizeError, TrackerError
+from .errors import CameraCalibrationError, FrameEncodingError, FrameSizeError, TrackerError
 from .parameters import TRACKER_NODE, TRACKER_PARAMS, tracker_calibration, tracker_config
 from .tracker import TagTracker, image_from_buffer
 
@@ -40,7 +40,7 @@ class TrackerNode(Node):
         self.calibration_problem = ''
         try:
             self.tracker = TagTracker(self.config, tracker_calibration(values))
-        except CalibrationError as err:   # keep running: frames are answered with missing poses
+        except CameraCalibrationError as err:   # keep running: frames are answered with missing poses
             self.calibration_problem = str(err)
             self.get_logger().error(f'no usable calibration, every robot will be reported missing: {err}')
         qos = {key: topics.qos_profile(topics.spec_of(key).qos) for key in topics.BY_KEY}

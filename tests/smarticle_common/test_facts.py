@@ -7,7 +7,7 @@ import re
 from pathlib import Path
 
 import pytest
-from smarticle_common.errors import SpecError
+from smarticle_common.errors import RobotSpecError
 from smarticle_common.facts import (BODY_LENGTH, FEEDBACK, GAIT_PERIOD, R_BIND_BL, SMALL, TAG_SIZE, RobotSpec,
                                     robot_preset)
 
@@ -31,7 +31,7 @@ def test_feedback_preset() -> None:
 
 
 def test_unknown_preset_refused() -> None:
-    with pytest.raises(SpecError, match="'huge'.*small"):
+    with pytest.raises(RobotSpecError, match="'huge'.*small"):
         robot_preset('huge')
 
 
@@ -39,12 +39,12 @@ def test_unknown_preset_refused() -> None:
                                           ('servo_torque', -1.0)])
 def test_bad_robot_values_refused(field: str, value: float) -> None:
     values = {**SMALL.__dict__, field: value}
-    with pytest.raises(SpecError, match=f'RobotSpec.{field}'):
+    with pytest.raises(RobotSpecError, match=f'RobotSpec.{field}'):
         RobotSpec(**values)
 
 
 def test_arms_heavier_than_robot_refused() -> None:
-    with pytest.raises(SpecError, match='arm_mass'):
+    with pytest.raises(RobotSpecError, match='arm_mass'):
         RobotSpec(**{**SMALL.__dict__, 'arm_mass': 0.02})
 
 

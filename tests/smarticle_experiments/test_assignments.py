@@ -1,4 +1,4 @@
-"""``--set NAME=VALUE``: one parser for smarticle-p6, smarticle-physics-study and smarticle-paper-probes."""
+"""``--set NAME=VALUE``: one parser for the study commands of smarticle-experiments (p6, physics-study)."""
 
 from __future__ import annotations
 

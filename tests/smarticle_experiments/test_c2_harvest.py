@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from smarticle_common.pairs import place_pair
-from smarticle_experiments.c2_harvest import C2Sample, front_order, harvest_trial, parse_seeds, signed_deg, summary
+from smarticle_experiments.c2_harvest import (C2Sample, front_order, harvest_trial, sample_from_record, sample_record,
+                                              signed_deg, summary)
 
 
 @pytest.mark.parametrize('theta_deg', [10.0, 100.0, 190.0, 280.0])
@@ -34,10 +35,18 @@ def test_summary_takes_medians_with_phi_about_zero() -> None:
         summary([])
 
 
-def test_seed_syntax() -> None:
-    assert parse_seeds('3-5') == [3, 4, 5] and parse_seeds('1,7') == [1, 7]
-    with pytest.raises(ValueError, match='empty'):
-        parse_seeds('5-3')
+def test_a_sample_survives_the_store_to_the_bit() -> None:
+    """The stored form of a sample (JSON) gives back the same sample, state included (not the gait: a start
+    takes the gait of the trial it starts)."""
+    import json
+    from dataclasses import replace
+
+    samples = harvest_trial(5002, periods=20.0, min_periods=5, settle=1)
+    assert samples and samples[0].state is not None
+    for s in samples[:3]:
+        assert s.state is not None
+        without_gait = replace(s, state=(replace(s.state[0], gait=None), replace(s.state[1], gait=None)))
+        assert sample_from_record(json.loads(json.dumps(sample_record(s)))) == without_gait
 
 
 def test_a_short_harvest_samples_only_c2_period_boundaries() -> None:

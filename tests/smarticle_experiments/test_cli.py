@@ -40,8 +40,8 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(case: str, tmp_path: Pa
         'zero seeds': ['run', spec_file(tmp_path, seeds=0)],
         'no such spec': ['run', 'p99'],
         'dead scheduler': ['run', spec_file(tmp_path), '--scheduler', f'tcp://127.0.0.1:{free_port()}'],
-        'bad seeds': ['run', spec_file(tmp_path), '--seeds', '5-2'],
-        'seeds and trials': ['run', spec_file(tmp_path), '--seeds', '0-1', '--trials', '2'],
+        'bad seeds': ['run', spec_file(tmp_path), '--seeds', '5..2'],
+        'seeds and trials': ['run', spec_file(tmp_path), '--seeds', '0..1', '--trials', '2'],
     }[case]
     try:
         code = main([*argv, '--out', str(out), '--no-progress'])
@@ -68,6 +68,30 @@ def test_list_names_the_shipped_experiments(capsys: pytest.CaptureFixture[str]) 
     assert 'NotConvergedWarning' in next(line for line in listed.splitlines() if line.startswith('accuracy '))
 
 
+def test_list_groups_the_current_specs_by_tag_and_all_adds_the_rest(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(['list']) == 0
+    listed = capsys.readouterr().out
+    paper = listed.split('# paper\n')[1].split('\n# ')[0]
+    assert [line.split()[0] for line in paper.splitlines()] == ['p1', 'p2', 'p3', 'p4', 'p5', 'p6', 'p7']
+    assert '# benchmark' in listed and '# diagnostic' in listed and 'p1_fine ' not in listed
+    assert main(['list', '--all']) == 0
+    everything = capsys.readouterr().out
+    assert '# archived' in everything and '\np1_fine' in everything   # the archive of a source tree
+
+
+def test_list_into_a_closed_pipe_ends_quietly_and_version_prints() -> None:
+    """``smarticle-experiments list | head -1``: no BrokenPipeError traceback; ``--version`` names the package."""
+    import subprocess
+    import sys
+
+    command = f'{sys.executable} -m smarticle_experiments.cli list | head -1'
+    done = subprocess.run(['bash', '-c', command], capture_output=True, text=True, timeout=120, check=False)
+    assert done.stdout.startswith('# ') and 'Traceback' not in done.stderr and 'BrokenPipe' not in done.stderr
+    version = subprocess.run([sys.executable, '-m', 'smarticle_experiments.cli', '--version'], capture_output=True,
+                             text=True, timeout=60, check=False)
+    assert version.returncode == 0 and version.stdout.startswith('smarticle-experiments ')
+
+
 def test_report_of_a_spec_never_run_says_so(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(['report', spec_file(tmp_path), '--out', str(tmp_path / 'out')]) == 2
     assert 'run it first' in capsys.readouterr().err
@@ -84,9 +108,33 @@ def test_a_report_over_some_of_the_seeds_sits_beside_the_whole_ones(tmp_path: Pa
     store = ResultStore(tmp_path / 'out' / spec.store)
     for t in spec.trials(code_version()):
         store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': {}, 'status': 'ok',
-                     'result': {'drift_um_per_cycle': float(t.seed), 'trouble': ''}})
-    assert main(['report', path, '--seeds', '11-12', '--out', str(tmp_path / 'out')]) == 0
+                     'result': {'drift_um_per_cycle': float(t.seed), 'trouble': '', 'heading_deg': 0.0, 'cycles': 20,
+                                'step_um_per_cycle': float(t.seed)}})
+    assert main(['report', path, '--seeds', '11..12', '--out', str(tmp_path / 'out')]) == 0
     part = (store.folder / 'report-lone-seeds-11-12' / 'report.md').read_text()
     assert '| 90 | 2 | 11.5 [' in part and '11, 12' in part
     assert main(['report', path, '--out', str(tmp_path / 'out')]) == 0
     assert '| 90 | 4 | 11.5 [' in (store.folder / 'report-lone' / 'report.md').read_text()
+
+
+def test_report_summary_prints_one_line_per_claim_from_the_store(tmp_path: Path,
+                                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    """``report --summary``: the paper specs' claims from the newest stored trials, whatever code version ran
+    them; a paper spec without stored trials is one 'not run' line."""
+    from smarticle_experiments.spec import load_spec
+    from smarticle_experiments.store import ResultStore
+
+    spec = load_spec('p7')
+    store = ResultStore(tmp_path / 'out' / spec.store)
+    for t in spec.trials({'commit': 'an older one'}):   # stored by another code version: still found
+        store.write({'key': t.key, 'kind': t.kind, 'params': dict(t.params), 'seed': t.seed, 'point': dict(t.point),
+                     'status': 'ok', 'end_unix': 1.0,
+                     'result': {'drift_um_per_cycle': 70.0 + t.seed, 'trouble': '', 'heading_deg': 0.0, 'cycles': 20,
+                                'step_um_per_cycle': 70.0}})
+    assert main(['report', '--summary', '--out', str(tmp_path / 'out')]) == 0
+    table = capsys.readouterr().out
+    p7 = [line for line in table.splitlines() if line.startswith('| p7 |')]
+    assert len(p7) == 1 and 'P7 drift per cycle at 90 deg' in p7[0] and '| 73.5 [' in p7[0]
+    assert '| 24 of 24 |' in p7[0] and 'report-p7' in p7[0]
+    assert '| p1 | ' in table and 'not run' in next(line for line in table.splitlines() if line.startswith('| p1 |'))
+    assert main(['report', 'p7', '--summary', '--out', str(tmp_path / 'out')]) == 2

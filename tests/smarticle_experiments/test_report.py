@@ -6,6 +6,7 @@ from pathlib import Path
 from typing import Any
 
 from smarticle_experiments.report import write_report
+from smarticle_experiments.results import P6Result, SingleResult
 from smarticle_experiments.spec import spec_from_mapping
 from smarticle_experiments.store import ResultStore
 
@@ -77,6 +78,12 @@ def test_p1_report_puts_the_paper_inside_the_sims_intervals_and_lists_what_it_le
         assert (store.folder / 'report-p1' / f'{png}.png').stat().st_size > 0
 
 
+def single(drift: float, trouble: str = '') -> dict[str, Any]:
+    """A lone robot's stored result (``SingleResult``) with this drift (um per cycle)."""
+    return SingleResult(heading_deg=0.0, trouble=trouble, cycles=20, drift_um_per_cycle=drift,
+                        step_um_per_cycle=drift).as_dict()
+
+
 def test_trials_in_sim_trouble_are_counted_and_listed_not_used(tmp_path: Path) -> None:
     spec = spec_from_mapping({'name': 'drift', 'kind': 'single', 'seeds': 4, 'report': ['drift'],
                               'paper': {'drift_um': 75.0}})
@@ -85,7 +92,7 @@ def test_trials_in_sim_trouble_are_counted_and_listed_not_used(tmp_path: Path) -
     for t, drift, trouble in zip(trials, [70.0, 74.0, 78.0, 9999.0], ['', '', '', 'sim trouble: robot 0 flipped'],
                                  strict=True):
         store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': {}, 'status': 'ok',
-                     'result': {'drift_um_per_cycle': drift, 'trouble': trouble}})
+                     'result': single(drift, trouble)})
     report = write_report(spec, trials, store, CODE).read_text()
     assert '3 used, 1 ended in sim trouble' in report and 'robot 0 flipped' in report
     assert '| 90 | 3 | 74.0 [' in report       # the trouble trial's 9999 is not in the mean
@@ -98,7 +105,7 @@ def test_drift_is_reported_per_amplitude_and_per_other_grid_setting(tmp_path: Pa
     def result(t: Any) -> dict[str, Any]:
         scale = t.point['physics.tilt_inertia_scale']
         drift = (115.0 if scale == 1.0 else 18.0) if t.point['alpha_max_deg'] == 10 else 114.0
-        return {'drift_um_per_cycle': drift + t.seed, 'trouble': ''}
+        return single(drift + t.seed)
 
     report = report_of(spec, tmp_path / 'amp', result)
     assert '| physics.tilt_inertia_scale | alpha_max (deg) | robots | drift (um / cycle) [95 %] |' in report
@@ -284,8 +291,9 @@ def test_the_p6_report_gives_one_row_per_grid_setting_and_compares_within_it(tmp
     # no clock noise: every pair reaches the end; with it, feedback lives 5 periods longer in every seed
     lives = {t.key: 100 if t.point['noise.clock_rate_sd'] == 0.0 else 30 + t.seed + 5 * bool(t.params['feedback'])
              for t in spec.trials(CODE)}
-    report = report_of(spec, tmp_path / 'p6y', lambda t: {'lifetime_periods': lives[t.key], 'halts': 0, 'trouble': '',
-                                                          'censored': lives[t.key] == 100})
+    report = report_of(spec, tmp_path / 'p6y', lambda t: P6Result(
+        lifetime_periods=lives[t.key], censored=lives[t.key] == 100, halts=0, trouble='', r0_bl=1.47, theta0_deg=99.0,
+        phi0_deg=7.0, final_r_bl=1.5).as_dict())
     assert '| noise.clock_rate_sd | condition | trials |' in report
     assert '| 0.0 | open loop 90 deg | 4 | 4 |' in report and '| 0.003 | open loop 90 deg | 4 | 0 |' in report
     assert '| 0.003 | open loop 90 deg | 4 | 0 | 31 [30, ?] | 31.5 +- 0.6 |' in report

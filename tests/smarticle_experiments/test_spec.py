@@ -21,6 +21,23 @@ def test_every_shipped_spec_loads_and_expands() -> None:
     assert counts['p1'] == 151
     assert counts['p4'] == 2 * 24 * 24
     assert counts['p6'] == (4 + 1) * 40          # two grid blocks: open loop 70/80/85/90, feedback 90
+    assert counts['p6_sensitivity'] == 9 * 10    # the preset and eight assumed values, one at a time
+
+
+def test_every_shipped_spec_is_tagged_and_current_and_cites_no_issue() -> None:
+    from smarticle_experiments.spec import TAGS, builtin_dir
+
+    for name in builtin_names():
+        spec = load_spec(name)
+        assert spec.status == 'current' and spec.tags and set(spec.tags) <= set(TAGS), name
+        text = (builtin_dir() / f'{name}.yaml').read_text()
+        assert 'issue #' not in text and 'smarticle-p6 ' not in text and 'smarticle-c2-' not in text, name
+    assert [n for n in builtin_names() if 'paper' in load_spec(n).tags] == ['p1', 'p2', 'p3', 'p4', 'p5', 'p6', 'p7']
+
+
+def test_seeds_take_the_stacks_seed_syntax() -> None:
+    spec = spec_from_mapping({'name': 's', 'kind': 'single', 'seeds': '3..5,9'})
+    assert spec.seeds == (3, 4, 5, 9)
 
 
 def test_p2_and_p3_reuse_the_p1_trials() -> None:
@@ -51,6 +68,9 @@ def test_a_users_yaml_file_is_a_spec(tmp_path: Path) -> None:
     ({'seeds': -3}, 'seeds'),
     ({'seeds': []}, 'seeds'),
     ({'seeds': {'count': 0}}, 'seeds.count'),
+    ({'seeds': '9..3'}, 'backwards'),
+    ({'tags': ['papers']}, 'tags'),
+    ({'status': 'old'}, 'status'),
     ({'periods': 0}, 'periods'),
     ({'periods': -5}, 'periods'),
     ({'kind': 'nope'}, 'nope'),

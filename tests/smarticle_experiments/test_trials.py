@@ -8,7 +8,7 @@ import json
 import pytest
 
 from smarticle_experiments.spec import apply_point
-from smarticle_experiments.trials import KINDS
+from smarticle_experiments.trials import KINDS, run_kind
 
 
 def params(kind: str, **changes: object) -> dict:
@@ -32,14 +32,14 @@ def params(kind: str, **changes: object) -> dict:
                                                           'xy1_bl', 'trouble'}),
 ])
 def test_every_kind_runs_a_tiny_trial(kind: str, changes: dict, fields: set[str]) -> None:
-    result = KINDS[kind].function(params(kind, **changes), 1)
+    result = run_kind(kind, params(kind, **changes), 1)
     assert fields <= set(result)
     assert result['trouble'] == ''
     json.dumps(result, allow_nan=True)   # JSON-ready (NaN becomes null in the store)
 
 
 def test_a_pair_start_that_overlaps_is_inadmissible_not_an_error() -> None:
-    result = KINDS['pair'].function(params('pair', r_bl=0.3, periods=2.0), 0)
+    result = run_kind('pair', params('pair', r_bl=0.3, periods=2.0), 0)
     assert result['admissible'] is False and 'overlap' in result['why']
 
 
@@ -55,7 +55,7 @@ def test_the_seed_jitters_the_pair_start_only_when_asked() -> None:
 
 
 def test_a_dense_trial_reports_isolation_from_the_glider_analysis() -> None:
-    result = KINDS['dense'].function(params('dense', robots=3, periods=4.0, min_periods=1), 2)
+    result = run_kind('dense', params('dense', robots=3, periods=4.0, min_periods=1), 2)
     for g in result['gliders']:
         assert 0.0 <= g['isolation'] <= 1.0
         assert g['isolated'] == (g['isolation'] >= 0.9)
@@ -63,7 +63,7 @@ def test_a_dense_trial_reports_isolation_from_the_glider_analysis() -> None:
 
 def test_a_dense_trial_says_how_close_it_came_to_the_trouble_limits() -> None:
     """The largest tilt and deepest overlap at the trouble checks: small, positive, inside the limits."""
-    result = KINDS['dense'].function(params('dense', robots=3, periods=4.0, min_periods=1), 2)
+    result = run_kind('dense', params('dense', robots=3, periods=4.0, min_periods=1), 2)
     assert result['trouble'] == ''
     assert 0.0 <= result['peak_tilt_deg'] < 25.0
     assert 0.0 < result['peak_overlap_mm'] < 4.0   # the bodies rest on the plate: a small overlap, never none
@@ -73,8 +73,8 @@ def test_a_trial_with_noise_differs_and_repeats() -> None:
     """The spec's noise reaches the physics: seeded, so the same seed repeats, and it moves the robots."""
     base = params('dense', robots=3, periods=3.0, min_periods=1)
     noisy = {**base, 'noise': {'clock_rate_sd': 0.01, 'servo_jitter': 0.02, 'friction_sd': 0.1}}
-    quiet = KINDS['dense'].function(base, 4)
-    first, again = KINDS['dense'].function(noisy, 4), KINDS['dense'].function(noisy, 4)
+    quiet = run_kind('dense', base, 4)
+    first, again = run_kind('dense', noisy, 4), run_kind('dense', noisy, 4)
     assert first['trajectory_bl'] == again['trajectory_bl']
     assert first['trajectory_bl'] != quiet['trajectory_bl']
     assert first['trajectory_bl'][0] == quiet['trajectory_bl'][0]   # the same start: noise has its own streams
@@ -83,8 +83,8 @@ def test_a_trial_with_noise_differs_and_repeats() -> None:
 def test_a_dense_trial_can_say_how_often_its_gliders_touch() -> None:
     """``contacts: true`` watches every physics step: each glider gets the share of its periods with contact."""
     p = params('dense', robots=3, periods=4.0, min_periods=1)
-    plain = KINDS['dense'].function(p, 2)
-    watched = KINDS['dense'].function({**p, 'contacts': True}, 2)
+    plain = run_kind('dense', p, 2)
+    watched = run_kind('dense', {**p, 'contacts': True}, 2)
     assert watched['trajectory_bl'] == plain['trajectory_bl']          # watching does not change the run
     assert watched['gliders'], 'seed 2 binds a pair of 3 dense robots'
     for g in watched['gliders']:
@@ -104,7 +104,7 @@ def test_contact_fractions_count_the_glider_span_only() -> None:
 def test_a_pair_trials_noise_follows_its_seed() -> None:
     """The pair scene carries the trial seed, so two seeds of the same (unjittered) start draw different noise."""
     p = {**params('pair', periods=3.0, min_periods=1), 'noise': {'clock_rate_sd': 0.01}}
-    one, other = KINDS['pair'].function(p, 1), KINDS['pair'].function(p, 2)
+    one, other = run_kind('pair', p, 1), run_kind('pair', p, 2)
     assert one['trajectory_bl'][0] == other['trajectory_bl'][0]       # the same start
     assert one['trajectory_bl'] != other['trajectory_bl']             # different clocks
 
@@ -117,9 +117,9 @@ def test_a_p6_trial_takes_the_specs_robot_and_physics_changes() -> None:
                               'grid': [{'feedback': [False], 'robot.servo_torque': [0.3, 0.9]}], 'report': ['p6']})
     assert len(spec.points()) == 2
     base = params('p6', periods=3.0, start='held')
-    plain = KINDS['p6'].function(base, 1)
-    heavy = KINDS['p6'].function({**base, 'robot': {'arm_mass': 0.03}}, 1)
-    again = KINDS['p6'].function({**base, 'robot': {'arm_mass': 0.03}}, 1)
-    finer = KINDS['p6'].function({**base, 'physics': {'time_step': 1.0 / 1920.0}}, 1)
+    plain = run_kind('p6', base, 1)
+    heavy = run_kind('p6', {**base, 'robot': {'arm_mass': 0.03}}, 1)
+    again = run_kind('p6', {**base, 'robot': {'arm_mass': 0.03}}, 1)
+    finer = run_kind('p6', {**base, 'physics': {'time_step': 1.0 / 1920.0}}, 1)
     assert heavy == again
     assert heavy['final_r_bl'] != plain['final_r_bl'] and finer['final_r_bl'] != plain['final_r_bl']

@@ -78,7 +78,7 @@ def test_a_window_that_catches_bracing_is_refused_with_counts(tmp_path: Path,
 
 def test_a_record_that_is_not_one_is_refused(tmp_path: Path) -> None:
     np.savez(tmp_path / 'other.npz', x=np.zeros(3))
-    with pytest.raises(CalibrationInputError, match='smarticle-c2-collisions'):
+    with pytest.raises(CalibrationInputError, match='smarticle-experiments c2-collisions'):
         load_record(tmp_path / 'other.npz')
     with pytest.raises(CalibrationInputError, match='links'):
         CollisionRecord(np.zeros(3), np.zeros((3, 2, 4)), np.zeros((3, 2, 2), dtype=bool), np.zeros(3), 1.6, (0, 0))

@@ -13,7 +13,7 @@ from smarticle_tracking.homography import (Calibration, board_targets, calibrate
                                             save_calibration)
 from smarticle_tracking.homography_cli import main as calibrate_main
 from smarticle_bringup.sim_camera import sim_calibration
-from smarticle_tracking.errors import CalibrationError, TrackerConfigError, TrackerInputError
+from smarticle_tracking.errors import CameraCalibrationError, TrackerConfigError, TrackerInputError
 from smarticle_tracking.parameters import SIM_CALIBRATION
 from smarticle_common.poses import poses_from_corners, tag_corners
 from smarticle_tracking.tracker import TagDetector, TagTracker, TrackerConfig, image_from_buffer
@@ -121,7 +121,7 @@ def test_calibrate_command_writes_a_file_that_tracks(tmp_path: Path) -> None:
 
 def test_calibration_needs_two_known_tags() -> None:
     corners = tag_corners(np.array([[0.0, 0.0, 1.0]]), 0.018) * 1000 + 500
-    with pytest.raises(CalibrationError, match='need at least 2'):
+    with pytest.raises(CameraCalibrationError, match='need at least 2'):
         calibrate(corners, np.array([10]), {10: (0.0, 0.0, 1.0), 11: (0.1, 0.0, 1.0)}, 0.018, 1000, 1000)
 
 
@@ -136,7 +136,7 @@ def test_bad_calibration_files_say_what_is_wrong(tmp_path: Path, text: str | Non
     path = tmp_path / 'cal.yaml'
     if text is not None:
         path.write_text(text)
-    with pytest.raises(CalibrationError, match=match):
+    with pytest.raises(CameraCalibrationError, match=match):
         load_calibration(path)
 
 
@@ -182,5 +182,5 @@ def test_invalid_tracker_config(changes: dict[str, object], match: str) -> None:
 
 
 def test_calibration_type_checks_its_fields() -> None:
-    with pytest.raises(CalibrationError):
+    with pytest.raises(CameraCalibrationError):
         Calibration(np.eye(3), 0, 10)

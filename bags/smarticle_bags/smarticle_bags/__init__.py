@@ -4,3 +4,26 @@ Pure cores (no rclpy): ``writer`` (bag folders), ``mcapfile`` (crash-tolerant .m
 ``reader`` (raw and decoded messages), ``arrays`` (NumPy per topic), ``reindex``, ``playback``
 (timing), ``selection`` (topic choice and remapping). ROS shells: ``recorder_node``, ``player_node``.
 """
+
+from __future__ import annotations
+
+#: Public name -> the module that defines it.
+_EXPORTS: dict[str, str] = {
+    'BagReader': 'reader',
+    'BagWriter': 'writer', 'WriterOptions': 'writer',
+    'start_recording': 'recording',
+    'BagError': 'errors', 'BagNotFoundError': 'errors', 'MetadataError': 'errors', 'CorruptBagError': 'errors',
+    'BagExistsError': 'errors', 'MessageDefinitionError': 'errors', 'TopicSelectionError': 'errors',
+    'OptionError': 'errors',
+}
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str) -> object:
+    """A public name of ``__all__``, imported from its module on first use (importing the package stays cheap)."""
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f'module {__name__!r} has no attribute {name!r}')
+    import importlib
+
+    return getattr(importlib.import_module(f'.{module}', __name__), name)
