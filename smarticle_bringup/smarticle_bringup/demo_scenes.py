@@ -112,9 +112,10 @@ class DemoScene:
                 'pair_phi_deg': start.phi_deg, 'pair_phase_0': start.phases[0], 'pair_phase_1': start.phases[1],
                 'publish_period': self.publish_period, 'phase_jitter': 0.0}
 
-    def robot_params(self, seed: int, clock_offsets: Sequence[float] | None = None) -> list[dict[str, Any]]:
-        """Each robot's own gait and feedback parameters: its phase, the preset's servo speed and, with
-        ``clock_offsets``, its clock rate offset (the feedback node takes no servo speed)."""
+    def robot_params(self, seed: int, clock_offsets: Sequence[float] | np.ndarray | None = None,
+                     ) -> list[dict[str, Any]]:
+        """Each robot's own gait and feedback parameters: its phase and, with ``clock_offsets``, its clock rate
+        offset (``demo.write_params`` adds the preset's servo speed for the gait node)."""
         start = self.start_for(seed)
         own: list[dict[str, Any]] = []
         for k, phase in enumerate(start.phases):
