@@ -40,15 +40,15 @@ DEMO_DOC = 'docs/demo.md'
 #: The physics page: what the sim reproduces of the paper and what it does not.
 PHYSICS_DOC = 'docs/sim_calibration.md'
 #: The one line of the demo's choice: what it runs and why.
-CHOICE = ('[demo] chose: two small robots 0.1 period apart (P5\'s start, seeded jitter), because in this model '
-          'two robots exactly in phase settle still and a pair a tenth of a period apart glides, a stand-in for '
-          'the real robots\' phase drift (their clocks drift, 0.29 % sd; ' + PHYSICS_DOC + ', docs/sim_core.md); '
-          'and the feedback on the paper\'s larger feedback robot, whose collisions reach the impact window '
-          '(the small robot\'s stay below it): ' + DEMO_DOC)
+CHOICE = ("[demo] chose: two small robots with robot 1's gait 0.1 period ahead (P5's start, seeded jitter), because in "
+          'this model two robots exactly in phase settle still while a pair a tenth of a period apart glides, and the '
+          "offset stands in for the real robots' phase drift (resonator clocks, 0.29 % sd: docs/sim_core.md; "
+          f"{PHYSICS_DOC}); then the feedback on the paper's larger feedback robot, whose collisions reach the impact "
+          f"window (the small robot's stay below it); why, and the 10-seed table: {DEMO_DOC}")
 #: One sentence on what the sim does not reproduce.
-LIMITS = ('[demo] not reproduced: in the paper\'s trials robots that start in phase form travelling gliders '
-          '(64 % of dense runs) and the feedback lengthens a C2 glider\'s life, while in this model (as in the '
-          'authors\' own engine) in-phase robots settle still and a halt does not hold a C2 pair: ' + PHYSICS_DOC)
+LIMITS = ("[demo] not reproduced: the paper's robots start in phase and form travelling gliders in 64 % of its dense "
+          "trials, and its feedback lengthens a C2 glider's life; in this model, as in the authors' own engine, robots "
+          f'exactly in phase settle still, and a halt does not hold a C2 pair together: {PHYSICS_DOC}')
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -380,9 +380,11 @@ def report_part(part: Part, run: StackRun, out: Path) -> tuple[Any, list[str]]:
     from .demo_figures import plot_halts, plot_trajectories
 
     width = part.spec.body_length
-    save_npz(Recording.from_poses(run.times, run.poses, width,
-                                  {'source': 'demo: /smarticles/poses over DDS', 'periods': part.periods,
-                                   'part': part.key, 'trouble': run.trouble}), out / 'poses.npz')
+    recording = Recording.from_poses(run.times, run.poses, width,
+                                     {'source': 'demo: /smarticles/poses and joint states over DDS',
+                                      'periods': part.periods, 'part': part.key, 'trouble': run.trouble})
+    save_npz(replace(recording, arm_angles=run.arms, meta={**recording.meta, 'arm_angles_recorded': True}),
+             out / 'poses.npz')
     config = part.demo_scene.glider_config() if part.demo_scene else GliderConfig(min_periods=MIN_PERIODS)
     report = glider_report(run.times, run.poses, config, out / 'gliders.png')
     (out / 'gliders.txt').write_text(report.table + '\n', encoding='utf-8')

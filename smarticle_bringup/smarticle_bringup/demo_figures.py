@@ -153,7 +153,8 @@ def write_animation(parts: Sequence[AnimatedPart], path: Path, step: float = 0.2
             ax.text(x0 + 0.05 * half, y0 + 0.09 * half, '1 W', fontsize=7)
             fig.suptitle(textwrap.fill(part.label, 64), fontsize=8)
             n = part.poses.shape[1]
-            links = [[Polygon(np.zeros((4, 2)), closed=True, fc=ROBOT_FILL, ec=ROBOT_EDGE, lw=0.6, animated=True)
+            links = [[Polygon(np.zeros((4, 2)), closed=True, fc=ROBOT_FILL, ec=ROBOT_EDGE, lw=0.6, animated=True,
+                              antialiased=False)   # hard edges: a third smaller GIF
                       for _ in range(3)] for _ in range(n)]
             for robot in links:
                 for patch in robot:

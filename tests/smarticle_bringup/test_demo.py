@@ -57,6 +57,10 @@ def test_demo_runs_both_parts_and_equals_the_batch_path(tmp_path: Path) -> None:
         batch = run_batch(scene, 1, periods, windows=stack_windows())
         assert data['poses'].shape == batch.poses.shape
         np.testing.assert_allclose(data['poses'], batch.poses, rtol=0, atol=1e-9)
+        arms = data['arm_angles']                         # the joint states the animation draws the arms from
+        seen = np.isfinite(arms).all(axis=(1, 2))
+        assert seen.mean() > 0.9
+        np.testing.assert_allclose(arms[seen], batch.arms[seen], rtol=0, atol=1e-9)
         assert (out / scene.key / 'trajectories.png').stat().st_size > 10_000
         from smarticle_bags.arrays import read_poses
         from smarticle_bags.reader import BagReader
