@@ -178,15 +178,21 @@ def feedback_config(phase: float, windows: dict[str, Any] | None = None) -> Any:
 
 
 def run_batch(scene: DemoScene, seed: int, periods: float | None = None, feedback: bool | None = None,
-              windows: dict[str, Any] | None = None) -> BatchRun:
+              windows: dict[str, Any] | None = None, clock_noise: bool = False) -> BatchRun:
     """Run ``scene`` for ``periods`` (default: the scene's) through the batch core, sampled at the sim
-    bridge's publish period, with the impact controller when ``feedback`` (default: the scene's)."""
+    bridge's publish period, with the impact controller when ``feedback`` (default: the scene's) and, with
+    ``clock_noise``, each robot's gait clock off by the seed's draw of the cited spread (``./demo.sh
+    --clock-noise`` gives the gait nodes the same draws)."""
     from smarticle_feedback.controller import ImpactController
     from smarticle_sim.batch import run_trial
     from smarticle_sim.runner import FeedbackController
     from smarticle_sim.settings import SimConfig
 
     config = SimConfig.from_preset(scene.preset)
+    if clock_noise:
+        from smarticle_sim.settings import CLOCK_RATE_SD, NoiseConfig
+
+        config = config.with_noise(NoiseConfig(clock_rate_sd=CLOCK_RATE_SD, servo_jitter=0.0, friction_sd=0.0))
     sim_scene = scene.scene(seed)
     use_feedback = scene.feedback if feedback is None else feedback
     controllers: list[FeedbackController] = []
