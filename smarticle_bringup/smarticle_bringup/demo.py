@@ -430,7 +430,11 @@ def main(argv: list[str] | None = None) -> int:
     except SceneError as err:
         print(f'demo: {err}', file=sys.stderr)
         return 2
-    print(CHOICE, flush=True)
+    if args.scene == 'pair' and args.only != 'feedback':
+        print(CHOICE, flush=True)
+    else:
+        print(f'[demo] as asked: {", ".join(p.start for p in parts)}; the default scene and why: {DEMO_DOC}',
+              flush=True)
     args.out = args.out.resolve()   # launch files resolve relative paths against their own folder
     wall0 = time.monotonic()
     animated = []
