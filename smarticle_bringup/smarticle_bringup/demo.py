@@ -168,13 +168,21 @@ def plan_parts(args: argparse.Namespace) -> list[Part]:
     return parts
 
 
+def shown(path: Path) -> str:
+    """``path`` as the demo prints it: relative to the working directory when it lies below it."""
+    try:
+        return str(path.relative_to(Path.cwd()))
+    except ValueError:
+        return str(path)
+
+
 def report_graph(names: list[str], path: Path) -> None:
     """Print the ROS graph seen during the run and write it to ``path``; name any node name used twice."""
     seen = sorted(names)
     twice = sorted({n for n in seen if seen.count(n) > 1})
     path.write_text('\n'.join(seen) + '\n', encoding='utf-8')
     print(f'[demo] ROS graph: {len(seen)} nodes, ' + (f'names used twice: {", ".join(twice)}' if twice else
-                                                       'every fully qualified name distinct') + f' ({path})')
+                                                       'every fully qualified name distinct') + f' ({shown(path)})')
 
 
 #: Exit code of the sim bridge when the physics hit trouble (SimTrouble): the run stopped early.
@@ -231,7 +239,6 @@ def run_stack(part: Part, args: argparse.Namespace, folder: Path) -> StackRun:
     from diagnostic_msgs.msg import DiagnosticArray
     from geometry_msgs.msg import PoseArray
     from rclpy.qos import QoSProfile, ReliabilityPolicy
-    from sensor_msgs.msg import JointState
     from smarticle_bags.metadata import read_metadata
     from smarticle_common import topics
     from smarticle_common.launching import DomainReservation, isolated_ros_env
@@ -290,8 +297,9 @@ def run_stack(part: Part, args: argparse.Namespace, folder: Path) -> StackRun:
     node.create_subscription(PoseArray, topics.topic('poses'), on_poses, deep)
     node.create_subscription(DiagnosticArray, topics.topic('gliders'), on_gliders,
                              topics.qos_profile(topics.spec_of('gliders').qos))
+    joint_state = topics.message_class(topics.spec_of('joint_states').type)
     for k in range(n):
-        node.create_subscription(JointState, topics.topic('joint_states', k), functools.partial(on_joints, k), deep)
+        node.create_subscription(joint_state, topics.topic('joint_states', k), functools.partial(on_joints, k), deep)
         if part.feedback:
             node.create_subscription(Header, topics.topic('halt', k), functools.partial(on_halt, k),
                                      topics.qos_profile(topics.spec_of('halt').qos))
@@ -303,7 +311,7 @@ def run_stack(part: Part, args: argparse.Namespace, folder: Path) -> StackRun:
         how = 'as separate processes' if args.separate else 'composed in one process (smarticle-compose)'
         print(f'\n[demo] {part.key}: sim.launch.xml: sim bridge + {n} gait nodes + {feedback}glider monitor {how}, '
               f'+ recorder{" + live view on ws://localhost:" + str(args.view_port) if args.view else ""} '
-              f'(domain {env["ROS_DOMAIN_ID"]}, logs in {log_dir}); simulating {part.periods:g} periods = '
+              f'(domain {env["ROS_DOMAIN_ID"]}, logs in {shown(log_dir)}); simulating {part.periods:g} periods = '
               f'{duration:.1f} s', flush=True)
         wall0 = time.monotonic()
         last = wall0
@@ -331,8 +339,8 @@ def run_stack(part: Part, args: argparse.Namespace, folder: Path) -> StackRun:
             raise RuntimeError(f'{driver.node.full_name} exited with code {code}:\n' + launch.output(driver)[-2000:])
         launch.stop()                                  # SIGINT: the recorder closes the bag
         info = read_metadata(bag)
-        print(f'[demo] {part.key}: recorded {info.message_count} messages of {len(info.topics)} topics to {bag} '
-              f'(smarticle-bag info {bag})')
+        print(f'[demo] {part.key}: recorded {info.message_count} messages of {len(info.topics)} topics to {shown(bag)} '
+              f'(smarticle-bag info {shown(bag)})')
         report_graph(graph, folder / 'nodes.txt')
         report = live.get('gliders')
         pairs = [status.name for status in report.status] if report is not None else []
@@ -406,7 +414,7 @@ def report_part(part: Part, run: StackRun, out: Path) -> tuple[Any, list[str]]:
         print('[demo]   feedback halts per robot: ' + ', '.join(f'{k}: {c}' for k, c in enumerate(per)) + first)
         written.append(plot_halts(run.times, run.poses, run.halts, width, out / 'halts.png',
                                   f'{part.key}: r of the pair and the halts ({sum(per)})'))
-    return report.analysis, [str(p) for p in written]
+    return report.analysis, [shown(p) for p in written]
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -451,7 +459,7 @@ def main(argv: list[str] | None = None) -> int:
         animated.append(AnimatedPart(f'part {index + 1} ({part.key}): {part.start}', part.spec, run.times,
                                      run.poses, run.arms, spans, run.halts, [o['phase'] for o in part.own]))
     if args.animation and animated:
-        files.append(str(write_animation(animated, args.out / 'demo.gif', step=args.frame_step)))
+        files.append(shown(write_animation(animated, args.out / 'demo.gif', step=args.frame_step)))
     print('\n' + LIMITS)
     print(f'[demo] wrote {", ".join(files)} (and per part poses.npz, bag/, params.yaml, logs/) in '
           f'{time.monotonic() - wall0:.0f} s')

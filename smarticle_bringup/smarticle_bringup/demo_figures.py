@@ -1,7 +1,8 @@
 """The demo's figures: robot paths, a pair's r(t) with the halts marked, and the animation of the run.
 
-Pure (no rclpy); matplotlib on its Agg backend, the animation written as a GIF with matplotlib's
-``PillowWriter`` (Pillow is a dependency of matplotlib). Each robot is drawn as its three links, the
+Pure (no rclpy); matplotlib on its Agg backend, the animation written as a GIF by matplotlib's
+``PillowWriter`` (``smarticle_tracking.gif.BlitGifWriter``: the moving artists are blitted onto a saved
+background and each frame mapped onto one fixed palette). Each robot is drawn as its three links, the
 footprint rectangles of ``smarticle_sim.geometry.robot_rects`` from its pose and its two arm angles.
 """
 
@@ -12,7 +13,6 @@ import textwrap
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, cast
 
 import numpy as np
 from smarticle_common.facts import GAIT_PERIOD, R_BIND_BL, RobotSpec
@@ -80,42 +80,6 @@ def frame_indices(times: np.ndarray, step: float) -> np.ndarray:
     return np.unique(idx)
 
 
-def _palette() -> Any:
-    """A fixed 256-colour GIF palette: the figure's colours, a grey ramp and a 6 x 6 x 6 colour cube."""
-    from matplotlib.colors import to_rgb
-    from PIL import Image
-
-    named = [ROBOT_FILL, ROBOT_EDGE, HALT_COLOUR, *CLASS_FILL.values(), '#ffffff', '#000000']
-    colours = [tuple(round(255 * c) for c in to_rgb(name)) for name in named]
-    colours += [(v, v, v) for v in range(0, 256, 7)]
-    colours += [(r, g, b) for r in range(0, 256, 51) for g in range(0, 256, 51) for b in range(0, 256, 51)]
-    flat = [c for colour in colours[:256] for c in colour]
-    image = Image.new('P', (1, 1))
-    image.putpalette(flat + [0] * (768 - len(flat)))
-    return image
-
-
-def _gif_writer(fps: int) -> Any:
-    """matplotlib's Pillow GIF writer, grabbing each frame from the canvas as last drawn (the animation blits
-    the moving artists onto a saved background) and mapping it onto a fixed palette: a full redraw and an
-    adaptive palette per frame cost about ten times as much."""
-    from matplotlib.animation import PillowWriter
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from PIL import Image
-
-    palette = _palette()
-
-    class BlitGifWriter(PillowWriter):
-        _frames: list[Any]   # PillowWriter's frames, set up by its ``setup``
-
-        def grab_frame(self, **savefig_kwargs: Any) -> None:
-            rgba = np.asarray(cast(FigureCanvasAgg, self.fig.canvas).buffer_rgba())
-            frame = Image.fromarray(np.ascontiguousarray(rgba[..., :3]))
-            self._frames.append(frame.quantize(palette=palette, dither=Image.Dither.NONE))
-
-    return BlitGifWriter(fps=fps)
-
-
 def write_animation(parts: Sequence[AnimatedPart], path: Path, step: float = 0.2, fps: int = 20,
                     size_px: int = 420) -> Path:
     """Write a GIF of ``parts`` one after the other: robots as three links, gliders in their class colour with
@@ -133,7 +97,9 @@ def write_animation(parts: Sequence[AnimatedPart], path: Path, step: float = 0.2
     canvas = FigureCanvasAgg(fig)   # a canvas that keeps its pixels: the moving artists are blitted onto a background
     fig.subplots_adjust(left=0.02, right=0.98, bottom=0.02, top=0.88)
     ax = fig.add_subplot(1, 1, 1)
-    writer = _gif_writer(fps)
+    from smarticle_tracking.gif import BlitGifWriter, fixed_palette
+
+    writer = BlitGifWriter(fps, fixed_palette([ROBOT_FILL, ROBOT_EDGE, HALT_COLOUR, *CLASS_FILL.values()]))
     path.parent.mkdir(parents=True, exist_ok=True)
     with writer.saving(fig, str(path), dpi):
         for part in parts:
