@@ -344,8 +344,8 @@ def run_stack(part: Part, args: argparse.Namespace, folder: Path) -> StackRun:
         report_graph(graph, folder / 'nodes.txt')
         report = live.get('gliders')
         pairs = [status.name for status in report.status] if report is not None else []
-        print(f'[demo] {part.key}: live glider monitor, last report: {len(pairs)} bound pair(s) '
-              + (', '.join(pairs) if pairs else ''))
+        print(f'[demo] {part.key}: live glider monitor, last report: {len(pairs)} bound pair(s)'
+              + (': ' + ', '.join(pairs) if pairs else ''))
     finally:
         launch.stop()
         node.destroy_node()
