@@ -195,7 +195,8 @@ def write_params(part: Part, args: argparse.Namespace, path: Path) -> dict[str, 
     ``/**`` is the shipped ``config/stack.yaml`` with ``alpha_max_deg`` replaced; ``/sim_bridge`` gets the
     part's robot preset and start (``Part.bridge``); ``/smarticle_<k>/gait`` and ``/smarticle_<k>/feedback``
     their robot's phase and, with ``--clock-noise``, its clock rate offset (the gait also the preset's servo
-    speed); ``/glider_monitor`` the demo's glider rule in this robot's body length.
+    speed); ``/glider_monitor`` the demo's glider rule in this robot's body length; ``/view`` (with ``--view``)
+    the preset whose outline it draws.
     Returns the shared settings (period, start_at, ...).
     """
     import yaml
@@ -209,7 +210,8 @@ def write_params(part: Part, args: argparse.Namespace, path: Path) -> dict[str, 
     data: dict[str, Any] = {'/**': {'ros__parameters': shared},
                             '/sim_bridge': {'ros__parameters': dict(part.bridge)},
                             '/glider_monitor': {'ros__parameters': {'min_periods': MIN_PERIODS, 'body_length': bl,
-                                                                    'r_bind': R_BIND_BL * bl}}}
+                                                                    'r_bind': R_BIND_BL * bl}},
+                            '/view': {'ros__parameters': {'preset': part.spec.name}}}
     for k, own in enumerate(part.own):
         data[f'/smarticle_{k}/gait'] = {'ros__parameters': dict(own, servo_speed=float(part.spec.servo_speed))}
         data[f'/smarticle_{k}/feedback'] = {'ros__parameters': dict(own)}
