@@ -167,7 +167,7 @@ def write_animation(parts: Sequence[AnimatedPart], path: Path, step: float = 0.2
                 if part.halts or 'feedback' in part.label:
                     per = [sum(1 for _, r in done if r == k) for k in range(n)]
                     lines.append('halts: ' + ', '.join(f'{k}: {c}' for k, c in enumerate(per))
-                                 + ('   HALT ' + ', '.join(str(k) for k in sorted(halted)) if halted else ''))
+                                 + ('   holding: ' + ', '.join(str(k) for k in sorted(halted)) if halted else ''))
                 info.set_text('\n'.join(lines))
                 canvas.restore_region(background)
                 for artist in moving:
