@@ -41,6 +41,7 @@ ROSDEP_KEYS: dict[str, str] = {
     'mcap_ros2': 'python3-mcap-ros2-support-pip',
     'foxglove': 'python3-foxglove-sdk-pip',
     'mujoco': 'python3-mujoco-pip',
+    'PIL': 'python3-pil',
 }
 #: ROS 2 packages the code imports by their own name (client library, message packages).
 ROS_PACKAGES = {'rclpy', 'std_msgs', 'sensor_msgs', 'geometry_msgs', 'diagnostic_msgs', 'visualization_msgs',

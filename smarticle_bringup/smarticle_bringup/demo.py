@@ -1,13 +1,20 @@
-"""The main demo: a sim-in-the-loop run of the stack with its default settings.
+"""The main demo: the stack in the loop with the sim, showing gliders and the tactile feedback acting.
 
-Starts ``smarticle_bringup/launch/sim.launch.xml`` through the project's launcher (the file ``ros2 launch``
-reads on a board): the sim bridge, one gait and one feedback node per robot and the live glider monitor,
-composed in one process on one executor (``--separate``: each its own process), a bag recorder and, with
-``--view``, the Foxglove live view; all talk over DDS in lock-step, so the physics is reproducible. The
-demo listens to ``/smarticles/poses`` like any other node would, then finds the gliders with the glider
-analysis core, prints a table and writes figures, the poses and an mcap bag to ``out/demo/``.
-Usage: ``./demo.sh [--robots 7] [--periods 60] [--alpha-max 90] [--seed 1] [--no-feedback] [--separate]
-[--view]``.
+Two labelled parts, each a run of ``smarticle_bringup/launch/sim.launch.xml`` through the project's launcher
+(the file ``ros2 launch`` reads on a board): the sim bridge in lock-step, one gait node per robot (and one
+feedback node per robot in part 2), the live glider monitor and a bag recorder, composed in one process on
+one executor (``--separate``: each its own process); with ``--view`` also the Foxglove live view. The demo
+listens to ``/smarticles/poses``, the joint states and the halts like any other node would, then finds the
+gliders with the glider analysis core, prints a table and writes figures, an animation, the poses and an mcap
+bag per part to ``out/demo/``.
+
+1. **gliders**: two small robots at P5's start, robot 1's gait a tenth of a period ahead, open loop
+   (``demo_scenes.GLIDERS``; ``--scene dense|random`` puts the paper's dense or a random start here instead);
+2. **feedback**: two of the paper's larger feedback robots side by side, a quarter period apart, with the
+   impact controller (``demo_scenes.FEEDBACK``).
+
+Usage: ``./demo.sh [--seed 1] [--periods 40] [--feedback-periods 12] [--only gliders|feedback] [--scene pair]
+[--phase-offset 0.1] [--clock-noise] [--no-feedback] [--no-animation] [--separate] [--view]``; docs/demo.md.
 """
 
 from __future__ import annotations
@@ -18,37 +25,64 @@ import math
 import shutil
 import sys
 import time
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-from smarticle_common.facts import GAIT_PERIOD, SMALL
+from smarticle_common.facts import GAIT_PERIOD, PRESETS, RobotSpec
 from smarticle_common.runs import Recording, save_npz
 
+from .demo_scenes import FEEDBACK, GLIDERS, MIN_PERIODS, TRAVEL_MIN_W, DemoScene, travelling
+
+#: Where the demo's choice and its evidence are written up (relative to the repository root).
+DEMO_DOC = 'docs/demo.md'
+#: The physics page: what the sim reproduces of the paper and what it does not.
+PHYSICS_DOC = 'docs/sim_calibration.md'
+#: The one line of the demo's choice: what it runs and why.
+CHOICE = ("[demo] chose: two small robots with robot 1's gait 0.1 period ahead (P5's start, seeded jitter), because in "
+          'this model two robots exactly in phase settle still while a pair a tenth of a period apart glides, and the '
+          "offset stands in for the real robots' phase drift (resonator clocks, 0.29 % sd: docs/sim_core.md; "
+          f"{PHYSICS_DOC}); then the feedback on the paper's larger feedback robot, whose collisions reach the impact "
+          f"window (the small robot's stay below it); why, and the 10-seed table: {DEMO_DOC}")
+#: One sentence on what the sim does not reproduce.
+LIMITS = ("[demo] not reproduced: the paper's robots start in phase and form travelling gliders in 64 % of its dense "
+          "trials, and its feedback lengthens a C2 glider's life; in this model, as in the authors' own engine, robots "
+          f'exactly in phase settle still, and a halt does not hold a C2 pair together: {PHYSICS_DOC}')
 
 
 def build_parser() -> argparse.ArgumentParser:
     """Command-line options of the demo."""
     parser = argparse.ArgumentParser(prog='demo.sh', description=__doc__.split('\n')[0] if __doc__ else None)
-    parser.add_argument('--robots', type=int, default=7, help='number of robots (default 7, as in the paper)')
-    parser.add_argument('--scene', choices=('dense', 'random', 'pair'), default='dense',
-                        help="starting arrangement (default: densely packed, the paper's Fig. 1(c))")
-    parser.add_argument('--periods', type=float, default=60.0,
-                        help='gait periods to run (default 60)')
-    parser.add_argument('--alpha-max', type=float, default=90.0, help='gait amplitude in degrees (default 90)')
-    parser.add_argument('--seed', type=int, default=1, help='seed of the starting arrangement')
+    parser.add_argument('--seed', type=int, default=1,
+                        help='seed of both starts (the jitter of the pair coordinates; default 1)')
+    parser.add_argument('--periods', type=float, default=GLIDERS.periods,
+                        help=f'part 1 (gliders): gait periods to run (default {GLIDERS.periods:g})')
+    parser.add_argument('--feedback-periods', type=float, default=FEEDBACK.periods,
+                        help=f'part 2 (feedback): gait periods to run (default {FEEDBACK.periods:g})')
+    parser.add_argument('--only', choices=('gliders', 'feedback'), default=None,
+                        help='run one part only (default: both)')
+    parser.add_argument('--scene', choices=('pair', 'dense', 'random'), default='pair',
+                        help="part 1's start: pair (default: P5's pair, robot 1 --phase-offset ahead), dense (the "
+                             "paper's densely packed start, Fig. 1(c)) or random")
+    parser.add_argument('--phase-offset', type=float, default=GLIDERS.start.phases[1],
+                        help='pair: robot 1\'s gait ahead of robot 0\'s by this many periods (default '
+                             f'{GLIDERS.start.phases[1]:g}; 0 = exactly in phase, where the pair settles still)')
+    parser.add_argument('--robots', type=int, default=7, help='dense and random starts: number of robots (default 7)')
     parser.add_argument('--phase-jitter', type=float, default=0.05,
-                        help='dense scene: seeded gait-phase offsets in +-this many periods, a stand-in for the '
-                             "real robots' phase drift (default 0.05; 0 = perfectly in phase, where the sim's "
-                             'pairs bind but hardly glide: docs/sim_calibration.md)')
+                        help='dense start: seeded gait-phase offsets in +-this many periods (default 0.05)')
+    parser.add_argument('--alpha-max', type=float, default=90.0, help='gait amplitude in degrees (default 90)')
     parser.add_argument('--clock-noise', action='store_true',
                         help="each robot's board clock runs fast or slow by a seeded draw of the cited resonator "
                              'spread (0.29 %% sd; the clock_rate_sd of noise: paper), the same draws as the batch '
                              'path for this seed; its gait and feedback nodes take it as clock_rate_offset')
     parser.add_argument('--feedback', action=argparse.BooleanOptionalAction, default=True,
-                        help='run the tactile feedback node of every robot (impact window from '
-                             'smarticle_feedback/config/feedback.yaml; default on); the sim then publishes FSR '
-                             'forces. --no-feedback runs the open-loop gait only')
+                        help='part 2 runs the tactile feedback node of each robot (impact window from '
+                             'config/stack.yaml; default on); --no-feedback runs the same robots open loop')
+    parser.add_argument('--animation', action=argparse.BooleanOptionalAction, default=True,
+                        help='write the animation out/demo/demo.gif (default on)')
+    parser.add_argument('--frame-step', type=float, default=0.2,
+                        help='animation: sim seconds between frames (default 0.2)')
     parser.add_argument('--separate', action='store_true',
                         help='run every node as its own process (default: the stack composed in one process '
                              'on one executor, smarticle-compose; same trajectories, faster)')
@@ -56,23 +90,25 @@ def build_parser() -> argparse.ArgumentParser:
                         help='serve the live view to Foxglove on ws://localhost:8765 (smarticle-view; open it in '
                              'Foxglove with smarticle_bringup/config/foxglove_layout.json)')
     parser.add_argument('--view-port', type=int, default=8765, help='WebSocket port of --view (default 8765)')
-    parser.add_argument('--min-periods', type=int, default=30,
-                        help='a pair bound this many periods is a glider (default 30, as in the paper)')
-    parser.add_argument('--out', type=Path, default=Path('out/demo'), help='output folder')
+    parser.add_argument('--out', type=Path, default=Path('out/demo'), help='output folder (default out/demo)')
     return parser
 
 
-def report_graph(names: list[str], path: Path) -> None:
-    """Print the ROS graph seen during the run and write it to ``path``; name any node name used twice."""
-    seen = sorted(names)
-    twice = sorted({n for n in seen if seen.count(n) > 1})
-    path.write_text('\n'.join(seen) + '\n', encoding='utf-8')
-    print(f'[demo] ROS graph: {len(seen)} nodes, ' + (f'names used twice: {", ".join(twice)}' if twice else
-                                                       'every fully qualified name distinct') + f' ({path})')
+@dataclass(frozen=True)
+class Part:
+    """One part of the demo as the stack runs it."""
 
-
-#: Exit code of the sim bridge when the physics hit trouble (SimTrouble): the run stopped early.
-SIM_TROUBLE_EXIT = 3
+    key: str                              # output subfolder and label: 'gliders' or 'feedback'
+    title: str
+    spec: RobotSpec
+    scene_kind: str                       # the sim bridge's scene: pair, dense or random
+    robots: int
+    periods: float
+    feedback: bool
+    bridge: dict[str, Any]                # /sim_bridge parameters besides the launch file's
+    own: list[dict[str, Any]]             # each robot's gait / feedback parameters (phase, clock offset)
+    start: str                            # how the robots start, one phrase
+    demo_scene: DemoScene | None          # the pair scene of demo_scenes, None for dense / random
 
 
 def clock_offsets(robots: int, seed: int) -> np.ndarray:
@@ -84,41 +120,121 @@ def clock_offsets(robots: int, seed: int) -> np.ndarray:
     return clock_rates(NoiseConfig(clock_rate_sd=CLOCK_RATE_SD, servo_jitter=0.0, friction_sd=0.0), robots, seed)
 
 
-def write_params(args: argparse.Namespace, path: Path) -> dict[str, Any]:
-    """The run's parameter file: the shared stack.yaml with the demo's amplitude, plus per-robot phases.
+def pair_part(scene: DemoScene, args: argparse.Namespace, periods: float, feedback: bool) -> Part:
+    """A part running one of ``demo_scenes``' pair scenes for the seed of ``args``."""
+    start = scene.start_for(args.seed)
+    offsets = clock_offsets(2, args.seed) if args.clock_noise else None
+    ahead = (start.phases[1] - start.phases[0]) % 1.0
+    how = (f'{scene.spec.name} robots, r {start.r_bl:.2f} BL, theta {start.theta_deg:.0f}, phi {start.phi_deg:.0f} '
+           f'deg, robot 1 {ahead:g} period ahead, {"feedback" if feedback else "open loop"}')
+    title = scene.title if feedback or not scene.feedback else \
+        f'{scene.spec.name} robots collide, the controller off (--no-feedback): no halts, for comparison'
+    return Part(scene.key, title, scene.spec, 'pair', 2, periods, feedback, scene.bridge_params(args.seed),
+                scene.robot_params(args.seed, offsets), how, scene)
+
+
+def crowd_part(args: argparse.Namespace) -> Part:
+    """Part 1 with the dense or random start of the sim bridge (``--scene dense|random``), open loop."""
+    from smarticle_sim.bridge import BridgeSettings
+
+    robots = BridgeSettings.defaults(alpha_max_deg=args.alpha_max, robots=args.robots, scene=args.scene,
+                                     seed=args.seed, phase_jitter=args.phase_jitter).scene().robots
+    offsets = clock_offsets(len(robots), args.seed) if args.clock_noise else None
+    own = []
+    for k, robot in enumerate(robots):
+        values: dict[str, Any] = {'phase': float(robot.gait.phase) if robot.gait is not None else 0.0}
+        if offsets is not None:
+            values['clock_rate_offset'] = float(offsets[k])
+        own.append(values)
+    jitter = f', phases +-{args.phase_jitter:g} period' if args.scene == 'dense' else ''
+    return Part('gliders', f'gliders from a {args.scene} start (open loop)', PRESETS['small'], args.scene,
+                args.robots, args.periods, False, {'preset': 'small', 'phase_jitter': float(args.phase_jitter)},
+                own, f'{args.robots} small robots, {args.scene} start{jitter}, open loop', None)
+
+
+def plan_parts(args: argparse.Namespace) -> list[Part]:
+    """The parts to run, in order."""
+    parts = []
+    if args.only in (None, 'gliders'):
+        if args.scene == 'pair':
+            scene = replace(GLIDERS, alpha_max_deg=args.alpha_max,
+                            start=replace(GLIDERS.start, phases=(0.0, args.phase_offset % 1.0)))
+            parts.append(pair_part(scene, args, args.periods, False))
+        else:
+            parts.append(crowd_part(args))
+    if args.only in (None, 'feedback'):
+        parts.append(pair_part(replace(FEEDBACK, alpha_max_deg=args.alpha_max), args, args.feedback_periods,
+                               args.feedback))
+    return parts
+
+
+def shown(path: Path) -> str:
+    """``path`` as the demo prints it: relative to the working directory when it lies below it."""
+    try:
+        return str(path.relative_to(Path.cwd()))
+    except ValueError:
+        return str(path)
+
+
+def report_graph(names: list[str], path: Path) -> None:
+    """Print the ROS graph seen during the run and write it to ``path``; name any node name used twice."""
+    seen = sorted(names)
+    twice = sorted({n for n in seen if seen.count(n) > 1})
+    path.write_text('\n'.join(seen) + '\n', encoding='utf-8')
+    print(f'[demo] ROS graph: {len(seen)} nodes, ' + (f'names used twice: {", ".join(twice)}' if twice else
+                                                       'every fully qualified name distinct') + f' ({shown(path)})')
+
+
+#: Exit code of the sim bridge when the physics hit trouble (SimTrouble): the run stopped early.
+SIM_TROUBLE_EXIT = 3
+
+
+def write_params(part: Part, args: argparse.Namespace, path: Path) -> dict[str, Any]:
+    """The part's parameter file: the shared stack.yaml with the demo's amplitude, plus the part's own.
 
     ``/**`` is the shipped ``config/stack.yaml`` with ``alpha_max_deg`` replaced; ``/sim_bridge`` gets the
-    phase jitter and ``/smarticle_<k>/gait`` and ``/smarticle_<k>/feedback`` their robot's phase (from the
-    sim bridge's own scene, so the start shape and the gaits agree) and, with ``--clock-noise``, its clock
-    rate offset (``clock_offsets``); ``/glider_monitor`` the glider length.
+    part's robot preset and start (``Part.bridge``); ``/smarticle_<k>/gait`` and ``/smarticle_<k>/feedback``
+    their robot's phase and, with ``--clock-noise``, its clock rate offset (the gait also the preset's servo
+    speed); ``/glider_monitor`` the demo's glider rule in this robot's body length; ``/view`` (with ``--view``)
+    the preset whose outline it draws.
     Returns the shared settings (period, start_at, ...).
     """
     import yaml
-    from smarticle_sim.bridge import BridgeSettings
+    from smarticle_common.facts import R_BIND_BL
 
     from .launch_files import package_share
 
     stack = yaml.safe_load((package_share('smarticle_bringup') / 'config' / 'stack.yaml').read_text(encoding='utf-8'))
     shared = dict(stack['/**']['ros__parameters'], alpha_max_deg=float(args.alpha_max))
-    scene = {'robots': args.robots, 'scene': args.scene, 'seed': args.seed, 'phase_jitter': args.phase_jitter}
-    robots = BridgeSettings.defaults(alpha_max_deg=args.alpha_max, period=shared['period'], **scene).scene().robots
+    bl = part.spec.body_length
     data: dict[str, Any] = {'/**': {'ros__parameters': shared},
-                            '/sim_bridge': {'ros__parameters': {'phase_jitter': float(args.phase_jitter)}},
-                            '/glider_monitor': {'ros__parameters': {'min_periods': args.min_periods}}}
-    offsets = clock_offsets(len(robots), args.seed) if args.clock_noise else None
-    for k, robot in enumerate(robots):
-        phase = float(robot.gait.phase) if robot.gait is not None else 0.0
-        own: dict[str, Any] = {'phase': phase}
-        if offsets is not None:
-            own['clock_rate_offset'] = float(offsets[k])
-        for node in ('gait', 'feedback'):
-            data[f'/smarticle_{k}/{node}'] = {'ros__parameters': dict(own)}
+                            '/sim_bridge': {'ros__parameters': dict(part.bridge)},
+                            '/glider_monitor': {'ros__parameters': {'min_periods': MIN_PERIODS, 'body_length': bl,
+                                                                    'r_bind': R_BIND_BL * bl}},
+                            '/view': {'ros__parameters': {'preset': part.spec.name}}}
+    for k, own in enumerate(part.own):
+        data[f'/smarticle_{k}/gait'] = {'ros__parameters': dict(own, servo_speed=float(part.spec.servo_speed))}
+        data[f'/smarticle_{k}/feedback'] = {'ros__parameters': dict(own)}
     path.write_text(yaml.safe_dump(data, sort_keys=False), encoding='utf-8')
     return shared
 
 
-def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.ndarray, float, str]:
-    """Run sim.launch.xml and listen; return sample times (s after the start), poses (T, N, 3), RTF, trouble."""
+@dataclass
+class StackRun:
+    """What the demo received from one part's run: times (s after the gait start), poses (T, N, 3), arm angles
+    (T, N, 2; NaN where no joint state came), halts (s after the start, robot, face), speed and trouble."""
+
+    times: np.ndarray
+    poses: np.ndarray
+    arms: np.ndarray
+    halts: list[tuple[float, int, str]]
+    rtf: float
+    wall: float
+    trouble: str
+
+
+def run_stack(part: Part, args: argparse.Namespace, folder: Path) -> StackRun:
+    """Run sim.launch.xml for ``part`` and listen to it; return what arrived."""
     import os
 
     import rclpy
@@ -129,36 +245,52 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
     from smarticle_common import topics
     from smarticle_common.launching import DomainReservation, isolated_ros_env
     from smarticle_common.messages import planar_poses
+    from std_msgs.msg import Header
 
     from .launch_files import package_share, resolve
     from .launcher import Launch
 
+    log_dir = folder / 'logs'
     reservation = None if 'ROS_DOMAIN_ID' in os.environ else DomainReservation()
     env = isolated_ros_env(reservation.domain_id if reservation else None)
-    os.environ.update({k: env[k] for k in ('ROS_DOMAIN_ID', 'ROS_AUTOMATIC_DISCOVERY_RANGE')})
+    saved = {k: os.environ.get(k) for k in ('ROS_DOMAIN_ID', 'ROS_AUTOMATIC_DISCOVERY_RANGE')}
+    os.environ.update({k: env[k] for k in saved})
     log_dir.mkdir(parents=True, exist_ok=True)
-    params = log_dir.parent / 'params.yaml'
-    shared = write_params(args, params)
+    params = folder / 'params.yaml'
+    shared = write_params(part, args, params)
     start_at, period = shared['start_at'], shared['period']
-    duration = start_at + args.periods * period
+    duration = start_at + part.periods * period
     samples: dict[int, np.ndarray] = {}
+    joints: dict[int, np.ndarray] = {}
+    halts: list[tuple[float, int, str]] = []
+    live: dict[str, Any] = {}
+    n = part.robots
+
+    def stamp_of(msg: Any) -> int:
+        return int(msg.header.stamp.sec) * 10**9 + int(msg.header.stamp.nanosec)
 
     def on_poses(msg: Any) -> None:
-        stamp = msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
-        samples[stamp] = planar_poses(msg)
+        samples[stamp_of(msg)] = planar_poses(msg)
 
-    live: dict[str, Any] = {}
+    def on_joints(robot: int, msg: Any) -> None:
+        row = joints.setdefault(stamp_of(msg), np.full((n, 2), np.nan))
+        for name, angle in zip(msg.name, msg.position, strict=False):
+            if name in topics.JOINT_NAMES:
+                row[robot, topics.JOINT_NAMES.index(name)] = angle
+
+    def on_halt(robot: int, msg: Any) -> None:
+        halts.append(((msg.stamp.sec * 10**9 + msg.stamp.nanosec) * 1e-9 - start_at, robot, msg.frame_id))
 
     def on_gliders(msg: Any) -> None:
         live['gliders'] = msg
 
-    bag = log_dir.parent / 'bag'
+    bag = folder / 'bag'
     if bag.exists():
         shutil.rmtree(bag)  # the previous demo run's bag
     listeners = 3 + (1 if args.view else 0)   # the monitor, the recorder, this demo (and the live view)
     plan = resolve(package_share('smarticle_bringup') / 'launch' / 'sim.launch.xml', {
-        'robots': str(args.robots), 'scene': args.scene, 'seed': str(args.seed), 'duration': repr(float(duration)),
-        'feedback': str(args.feedback).lower(), 'composed': str(not args.separate).lower(),
+        'robots': str(n), 'scene': part.scene_kind, 'seed': str(args.seed), 'duration': repr(float(duration)),
+        'feedback': str(part.feedback).lower(), 'composed': str(not args.separate).lower(),
         'wait_for_subscribers': str(listeners), 'record': 'true', 'bag': str(bag),
         'view': str(args.view).lower(), 'view_port': str(args.view_port), 'params_file': str(params)})
     rclpy.init()
@@ -167,30 +299,26 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
     node.create_subscription(PoseArray, topics.topic('poses'), on_poses, deep)
     node.create_subscription(DiagnosticArray, topics.topic('gliders'), on_gliders,
                              topics.qos_profile(topics.spec_of('gliders').qos))
-    halts = [0] * args.robots
-
-    def count_halt(robot: int, _msg: Any) -> None:
-        halts[robot] += 1
-    if args.feedback:
-        from std_msgs.msg import Header
-
-        for k in range(args.robots):
-            node.create_subscription(Header, topics.topic('halt', k), functools.partial(count_halt, k),
+    joint_state = topics.message_class(topics.spec_of('joint_states').type)
+    for k in range(n):
+        node.create_subscription(joint_state, topics.topic('joint_states', k), functools.partial(on_joints, k), deep)
+        if part.feedback:
+            node.create_subscription(Header, topics.topic('halt', k), functools.partial(on_halt, k),
                                      topics.qos_profile(topics.spec_of('halt').qos))
     launch = Launch(plan, log_dir, env)
     try:
         launch.start()
         driver = next(r for r in launch.running if r.node.on_exit_shutdown)   # the sim bridge, or its host
-        feedback = f'{args.robots} feedback nodes + ' if args.feedback else ''
+        feedback = f'{n} feedback nodes + ' if part.feedback else ''
         how = 'as separate processes' if args.separate else 'composed in one process (smarticle-compose)'
-        print(f'[demo] sim.launch.xml: sim bridge + {args.robots} gait nodes + {feedback}glider monitor {how}, '
+        print(f'\n[demo] {part.key}: sim.launch.xml: sim bridge + {n} gait nodes + {feedback}glider monitor {how}, '
               f'+ recorder{" + live view on ws://localhost:" + str(args.view_port) if args.view else ""} '
-              f'(domain {env["ROS_DOMAIN_ID"]}, logs in {log_dir}); simulating {args.periods:g} periods = '
+              f'(domain {env["ROS_DOMAIN_ID"]}, logs in {shown(log_dir)}); simulating {part.periods:g} periods = '
               f'{duration:.1f} s', flush=True)
         wall0 = time.monotonic()
         last = wall0
         graph: list[str] = []
-        expected_nodes = args.robots * (2 if args.feedback else 1) + 4 + (1 if args.view else 0)
+        expected_nodes = n * (2 if part.feedback else 1) + 4 + (1 if args.view else 0)
         while driver.proc.poll() is None:
             rclpy.spin_once(node, timeout_sec=0.05)
             if samples and len(graph) < expected_nodes:     # keep the fullest view of the graph
@@ -199,7 +327,7 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
             if time.monotonic() - last > 5.0 and samples:
                 last = time.monotonic()
                 sim = max(samples) * 1e-9
-                print(f'[demo] sim time {sim:6.1f} / {duration:.1f} s  ({sim / duration:4.0%}), '
+                print(f'[demo] {part.key}: sim time {sim:6.1f} / {duration:.1f} s  ({sim / duration:4.0%}), '
                       f'{sim / (last - wall0):.1f}x real time', flush=True)
         for _ in range(20):
             rclpy.spin_once(node, timeout_sec=0.02)
@@ -213,25 +341,82 @@ def run_stack(args: argparse.Namespace, log_dir: Path) -> tuple[np.ndarray, np.n
             raise RuntimeError(f'{driver.node.full_name} exited with code {code}:\n' + launch.output(driver)[-2000:])
         launch.stop()                                  # SIGINT: the recorder closes the bag
         info = read_metadata(bag)
-        print(f'[demo] recorded {info.message_count} messages of {len(info.topics)} topics to {bag} '
-              f'(smarticle-bag info {bag})')
-        if args.feedback:
-            print('[demo] feedback halts per robot: ' + ', '.join(f'{k}: {n}' for k, n in enumerate(halts)))
-        report_graph(graph, log_dir.parent / 'nodes.txt')
+        print(f'[demo] {part.key}: recorded {info.message_count} messages of {len(info.topics)} topics to {shown(bag)} '
+              f'(smarticle-bag info {shown(bag)})')
+        report_graph(graph, folder / 'nodes.txt')
         report = live.get('gliders')
         pairs = [status.name for status in report.status] if report is not None else []
-        print(f'[demo] live glider monitor, last report: {len(pairs)} bound pair(s) '
-              + (', '.join(pairs) if pairs else ''))
+        print(f'[demo] {part.key}: live glider monitor, last report: {len(pairs)} bound pair(s)'
+              + (': ' + ', '.join(pairs) if pairs else ''))
     finally:
         launch.stop()
         node.destroy_node()
         rclpy.try_shutdown()
         if reservation is not None:
             reservation.close()
-    stamps = np.array(sorted(samples))
-    poses = np.array([samples[s] for s in stamps])
+        for name, value in saved.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
+    stamps = np.array(sorted(samples), dtype=np.int64)
+    poses = np.array([samples[s] for s in stamps]).reshape(len(stamps), n, 3)
+    arms = np.array([joints.get(int(s), np.full((n, 2), np.nan)) for s in stamps]).reshape(len(stamps), n, 2)
+    times = stamps * 1e-9 - start_at
     rtf = (stamps[-1] * 1e-9) / wall if len(stamps) else 0.0
-    return stamps * 1e-9 - start_at, poses, rtf, trouble
+    keep = times >= -1e-9
+    return StackRun(times[keep], poses[keep], arms[keep], sorted(halts), rtf, wall, trouble)
+
+
+def glider_lines(gliders: Any, width: float) -> str:
+    """The glider table the demo prints: pair, class, lifetime, travel in W, whether it travels."""
+    if not gliders:
+        return '  none'
+    rows = [('pair', 'class', 'from period', 'lifetime [periods]', 'bound at the end', 'r [BL]', 'travel [W]',
+             f'travels (>= {TRAVEL_MIN_W:g} W)')]
+    for g in gliders:
+        rows.append((f'{g.i}-{g.j}', g.glider_class.value, str(g.start_period), str(g.lifetime_periods),
+                     'yes' if g.ongoing else 'no', f'{g.r_mean / width:.2f}', f'{g.distance / width:.2f}',
+                     'yes' if travelling(g, width) else 'no'))
+    widths = [max(len(r[c]) for r in rows) for c in range(len(rows[0]))]
+    return '\n'.join('  ' + '  '.join(cell.rjust(w) for cell, w in zip(r, widths, strict=True)) for r in rows)
+
+
+def report_part(part: Part, run: StackRun, out: Path) -> tuple[Any, list[str]]:
+    """Analyse one part's run, print its summary lines, write its figures; return the analysis and the files."""
+    from smarticle_tracking.gliders import GliderConfig
+    from smarticle_tracking.report import glider_report
+
+    from .demo_figures import plot_halts, plot_trajectories
+
+    width = part.spec.body_length
+    recording = Recording.from_poses(run.times, run.poses, width,
+                                     {'source': 'demo: /smarticles/poses and joint states over DDS',
+                                      'periods': part.periods, 'part': part.key, 'trouble': run.trouble})
+    save_npz(replace(recording, arm_angles=run.arms, meta={**recording.meta, 'arm_angles_recorded': True}),
+             out / 'poses.npz')
+    config = part.demo_scene.glider_config() if part.demo_scene else GliderConfig(min_periods=MIN_PERIODS)
+    report = glider_report(run.times, run.poses, config, out / 'gliders.png')
+    (out / 'gliders.txt').write_text(report.table + '\n', encoding='utf-8')
+    received = run.times[-1] / GAIT_PERIOD if len(run.times) else 0.0
+    print(f'[demo] part {part.key}: {part.title}\n[demo]   {part.start}; {received:.0f} periods received over '
+          f'DDS, {run.rtf:.1f}x real time ({run.wall:.0f} s)')
+    if run.trouble:
+        print(f'[demo]   THE SIMULATION STOPPED EARLY: {run.trouble}; the analysis covers the run up to then')
+    print(f'[demo]   gliders (a pair bound >= {MIN_PERIODS} periods: centre distance under '
+          f'{config.r_bind / width:.1f} BL in some frame of each period; travel = net displacement of its centre '
+          f'in W = BL = {width * 100:.1f} cm):')
+    print(glider_lines(report.analysis.gliders, width))
+    written = [plot_trajectories(run.times, run.poses, width, out / 'trajectories.png', part.key)]
+    if report.figure is not None:
+        written.append(report.figure)
+    if part.feedback:
+        per = [sum(1 for _, k, _ in run.halts if k == robot) for robot in range(part.robots)]
+        first = f' (first at {run.halts[0][0]:.2f} s after the start)' if run.halts else ''
+        print('[demo]   feedback halts per robot: ' + ', '.join(f'{k}: {c}' for k, c in enumerate(per)) + first)
+        written.append(plot_halts(run.times, run.poses, run.halts, width, out / 'halts.png',
+                                  f'{part.key}: r of the pair and the halts ({sum(per)})'))
+    return report.analysis, [shown(p) for p in written]
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -239,63 +424,48 @@ def main(argv: list[str] | None = None) -> int:
     import matplotlib
 
     matplotlib.use('Agg')
-    from smarticle_tracking.gliders import GliderConfig
-    from smarticle_tracking.report import glider_report
+    from smarticle_sim.errors import SceneError
+
+    from .demo_figures import AnimatedPart, GliderSpan, write_animation
 
     args = build_parser().parse_args(argv)
-    if args.robots < 1 or args.periods <= 0:
-        print('demo: --robots must be >= 1 and --periods > 0', file=sys.stderr)
+    if args.robots < 1 or args.periods <= 0 or args.feedback_periods <= 0 or args.frame_step <= 0:
+        print('demo: --robots must be >= 1, --periods, --feedback-periods and --frame-step > 0', file=sys.stderr)
         return 2
+    if not (math.isfinite(args.phase_offset) and 0.0 <= args.phase_offset < 1.0):
+        print('demo: --phase-offset must be a fraction of a period in [0, 1)', file=sys.stderr)
+        return 2
+    try:
+        parts = plan_parts(args)
+    except SceneError as err:
+        print(f'demo: {err}', file=sys.stderr)
+        return 2
+    if args.scene == 'pair' and args.only != 'feedback':
+        print(CHOICE, flush=True)
+    else:
+        print(f'[demo] as asked: {", ".join(p.start for p in parts)}; the default scene and why: {DEMO_DOC}',
+              flush=True)
     args.out = args.out.resolve()   # launch files resolve relative paths against their own folder
-    args.out.mkdir(parents=True, exist_ok=True)
-    times, poses, rtf, trouble = run_stack(args, args.out / 'logs')
-    if trouble:
-        print(f'[demo] THE SIMULATION STOPPED EARLY: {trouble}\n[demo] the analysis below covers the run up to '
-              'that point (the physics at the default settings is not yet stable: docs/physics_study.md)')
-    keep = times >= 0.0
-    times, poses = times[keep], poses[keep]
-    save_npz(Recording.from_poses(times, poses, SMALL.body_length,
-                                  {'source': 'demo: /smarticles/poses over DDS', 'periods': args.periods,
-                                   'seed': args.seed, 'scene': args.scene, 'trouble': trouble}),
-             args.out / 'poses.npz')
-    config = GliderConfig(min_periods=args.min_periods)
-    report = glider_report(times, poses, config, args.out / 'gliders.png')
-    print(f'\n[demo] {args.robots} robots, {args.scene} start, alpha_max {args.alpha_max:g} deg, '
-          f'{times[-1] / GAIT_PERIOD:.0f} periods received over DDS, {rtf:.1f}x real time')
-    print(f'[demo] gliders (pairs bound >= {args.min_periods} periods; bound = centre distance under '
-          f'{config.r_bind / config.body_length:.1f} BL in some frame of each period, from poses alone (the one '
-          'rule of docs/gliders.md); isolated = no third robot within 2 W in >= 90 % of its periods):')
-    print(report.table)
-    moved = np.linalg.norm(poses[-1, :, :2] - poses[0, :, :2], axis=1) / config.width
-    print('[demo] net displacement of each robot (W): ' + ', '.join(f'{k}: {d:.2f}' for k, d in enumerate(moved)))
-    plot_trajectories(times, poses, config.width, args.out / 'trajectories.png')
-    written = [args.out / 'trajectories.png', args.out / 'poses.npz']
-    if report.figure is not None:
-        written.append(report.figure)
-    print('[demo] wrote ' + ', '.join(str(p) for p in written))
+    wall0 = time.monotonic()
+    animated = []
+    files: list[str] = []
+    for index, part in enumerate(parts):
+        folder = args.out / part.key
+        folder.mkdir(parents=True, exist_ok=True)
+        run = run_stack(part, args, folder)
+        analysis, written = report_part(part, run, folder)
+        files += written
+        width = part.spec.body_length
+        spans = [GliderSpan(g.i, g.j, g.glider_class.value, g.start_time, g.end_time, g.distance / width)
+                 for g in analysis.gliders]
+        animated.append(AnimatedPart(f'part {index + 1} ({part.key}): {part.start}', part.spec, run.times,
+                                     run.poses, run.arms, spans, run.halts, [o['phase'] for o in part.own]))
+    if args.animation and animated:
+        files.append(shown(write_animation(animated, args.out / 'demo.gif', step=args.frame_step)))
+    print('\n' + LIMITS)
+    print(f'[demo] wrote {", ".join(files)} (and per part poses.npz, bag/, params.yaml, logs/) in '
+          f'{time.monotonic() - wall0:.0f} s')
     return 0
-
-
-def plot_trajectories(times: np.ndarray, poses: np.ndarray, width: float, path: Path) -> None:
-    """Draw every robot's body-centre path (in W) with start and end markers."""
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(6, 6), dpi=100)
-    ax = fig.add_subplot(1, 1, 1)
-    xy = poses[:, :, :2] / width
-    for k in range(xy.shape[1]):
-        line, = ax.plot(xy[:, k, 0], xy[:, k, 1], lw=0.8, label=f'robot {k}')
-        ax.plot(*xy[0, k], 'o', color=line.get_color(), ms=4)
-        ax.plot(*xy[-1, k], 's', color=line.get_color(), ms=5)
-        ax.annotate('', xy=xy[-1, k] + 0.4 * np.array([math.cos(poses[-1, k, 2]), math.sin(poses[-1, k, 2])]),
-                    xytext=xy[-1, k], arrowprops={'arrowstyle': '->', 'color': line.get_color()})
-    ax.set_aspect('equal')
-    ax.set_xlabel('x (W)')
-    ax.set_ylabel('y (W)')
-    ax.set_title(f'sim-in-the-loop: {xy.shape[1]} robots, {times[-1]:.0f} s (o start, square end, arrow heading)',
-                 fontsize=9)
-    ax.legend(fontsize=7)
-    fig.savefig(path)
 
 
 def entry() -> None:

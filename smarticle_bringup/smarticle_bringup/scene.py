@@ -132,6 +132,16 @@ def robot_cubes(pose: ArrayLike, arm_angles: ArrayLike | None, dims: RobotDims, 
     return tuple(cubes)
 
 
+def dims_of(preset: str) -> RobotDims:
+    """The outline of a robot preset (``smarticle_common.facts.PRESETS``); ValueError naming the known ones."""
+    from smarticle_common.facts import PRESETS
+
+    spec = PRESETS.get(preset)
+    if spec is None:
+        raise ValueError(f'robot preset must be one of {", ".join(sorted(PRESETS))}, got {preset!r}')
+    return RobotDims(spec.body_width, spec.body_depth, spec.arm_length, spec.arm_thickness)
+
+
 @dataclass
 class SceneBuilder:
     """Keeps the latest poses, arm angles and gliders, and the trails; ``update()`` gives the scene."""

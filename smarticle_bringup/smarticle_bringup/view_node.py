@@ -19,11 +19,12 @@ from typing import Any
 import rclpy
 from rclpy.node import Node
 from smarticle_common import topics
+from smarticle_common.facts import PRESETS
 from smarticle_common.messages import planar_poses
 from smarticle_common.node import DiagnosticsPublisher, OK, WARN, read_config, run_node
 from smarticle_common.params import ParameterError, ParamSpec
 
-from .scene import Entity, SceneBuilder, glider_reports
+from .scene import Entity, SceneBuilder, dims_of, glider_reports
 
 NODE_NAME = 'view'
 #: The Foxglove channel the scene goes to.
@@ -36,6 +37,7 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec('trail_length', 200, 'points kept in each robot trail', 2, 100000),
     ParamSpec('trail_spacing', 0.002, 'a robot moves this far (m) before its trail gets a new point', 0.0, 1.0),
     ParamSpec('show_arms', True, 'subscribe to /smarticle_<k>/joint_states and draw the arms'),
+    ParamSpec('preset', 'small', f'robot preset whose outline is drawn: {", ".join(sorted(PRESETS))}'),
 )
 
 
@@ -76,7 +78,12 @@ class ViewNode(Node):
         super().__init__(NODE_NAME, **node_options)
         values = read_config(self, PARAMS, dict)
         self.fox = fox
-        self.builder = SceneBuilder(trail_length=values['trail_length'], trail_spacing=values['trail_spacing'])
+        try:
+            dims = dims_of(values['preset'])
+        except ValueError as err:
+            raise ParameterError(f'node {NODE_NAME}: {err}') from None
+        self.builder = SceneBuilder(dims=dims, trail_length=values['trail_length'],
+                                    trail_spacing=values['trail_spacing'])
         self.show_arms: bool = values['show_arms']
         self.watched = 0
         self.bad_reports = 0

@@ -1,76 +1,229 @@
-"""The README's main command in a short mode: the whole sim-in-the-loop stack, summary and figures."""
+"""The README's main command: its two scenes, their batch twins, the printout, the figures and the animation."""
 
 from __future__ import annotations
 
+import math
 import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from smarticle_bringup.demo_scenes import FEEDBACK, GLIDERS, MIN_PERIODS, TRAVEL_MIN_W, analyse, run_batch, travelling
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))   # the repository root: tests.* helpers
+from tests.helpers.glider_scenes import pair_scene as synthetic_pair  # noqa: E402
+
+
+def stack_windows() -> dict[str, object]:
+    """The shared windows the demo's feedback nodes read (config/stack.yaml)."""
+    import yaml
+
+    data = yaml.safe_load((ROOT / 'smarticle_bringup' / 'config' / 'stack.yaml').read_text(encoding='utf-8'))
+    return dict(data['/**']['ros__parameters'])
 
 
 @pytest.mark.integration
 @pytest.mark.slow
-def test_demo_runs_the_stack_and_writes_its_outputs(tmp_path: Path) -> None:
+def test_demo_runs_both_parts_and_equals_the_batch_path(tmp_path: Path) -> None:
+    """A short default demo: both parts over DDS, the glider table, halts > 0, figures, the animation, bags;
+    and each part's poses (and halts) are the batch core's for the same scene and seed, so the seed table of
+    tests/benchmarks/demo_seeds.py is what the demo runs."""
     out = tmp_path / 'demo'
     # a relative output folder, as ./demo.sh uses (out/demo): the launch files must not resolve it themselves
-    proc = subprocess.run([sys.executable, '-m', 'smarticle_bringup.demo', '--robots', '3', '--periods', '4',
-                           '--out', 'demo'], capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    proc = subprocess.run([sys.executable, '-m', 'smarticle_bringup.demo', '--periods', '3', '--feedback-periods',
+                           '2', '--frame-step', '0.4', '--out', 'demo'], capture_output=True, text=True, timeout=300,
+                          cwd=tmp_path)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
-    assert 'gliders (pairs bound' in proc.stdout and 'net displacement' in proc.stdout
-    data = np.load(out / 'poses.npz')
-    assert data['poses'].shape[1:] == (3, 3)
-    assert data['time'][-1] == pytest.approx(4 * 1.6, abs=0.2)
-    assert np.all(np.isfinite(data['poses']))
-    assert (out / 'trajectories.png').stat().st_size > 10_000
-    host = list((out / 'logs').glob('smarticle-compose-*.log'))        # composed by default
-    assert 'composed in one process' in proc.stdout and len(host) == 1
-    assert 'live glider monitor, last report' in proc.stdout
-    assert '3 feedback nodes' in proc.stdout and 'feedback halts per robot: 0:' in proc.stdout   # on by default
-    assert host[0].read_text().count('windows') == 3                   # each feedback node started
-    graph = (out / 'nodes.txt').read_text().split()              # the ROS graph during the run
-    assert 'every fully qualified name distinct' in proc.stdout and len(graph) == len(set(graph)), graph
-    for k in range(3):                                           # each robot's nodes in its namespace
+    text = proc.stdout
+    assert text.startswith('[demo] chose: ') and 'docs/demo.md' in text.splitlines()[0]
+    assert text.count('lifetime [periods]') + text.count('\n  none') == 2          # a glider table per part
+    assert '[demo] not reproduced: ' in text and 'docs/sim_calibration.md' in text
+    halts_line = next(line for line in text.splitlines() if 'feedback halts per robot' in line)
+    counts = [int(c.split(': ')[1]) for c in halts_line.split('robot: ')[1].split(' (')[0].split(', ')]
+    assert len(counts) == 2 and sum(counts) > 0, halts_line
+    assert 'composed in one process' in text
+    assert len(list((out / 'gliders' / 'logs').glob('smarticle-compose-*.log'))) == 1
+    feedback_host = next((out / 'feedback' / 'logs').glob('smarticle-compose-*.log')).read_text()
+    assert feedback_host.count('windows') == 2                       # each feedback node started
+    graph = (out / 'feedback' / 'nodes.txt').read_text().split()     # the ROS graph during the run
+    assert len(graph) == len(set(graph)) and {'/sim_bridge', '/glider_monitor'} <= set(graph), graph
+    for k in range(2):
         assert f'/smarticle_{k}/gait' in graph and f'/smarticle_{k}/feedback' in graph, graph
-    assert {'/sim_bridge', '/glider_monitor'} <= set(graph), graph
-    from smarticle_bags.arrays import read_poses
-    from smarticle_bags.reader import BagReader
+    for scene, periods in ((GLIDERS, 3.0), (FEEDBACK, 2.0)):
+        data = np.load(out / scene.key / 'poses.npz')
+        assert data['time'][-1] == pytest.approx(periods * 1.6, abs=0.05)
+        batch = run_batch(scene, 1, periods, windows=stack_windows())
+        assert data['poses'].shape == batch.poses.shape
+        np.testing.assert_allclose(data['poses'], batch.poses, rtol=0, atol=1e-9)
+        arms = data['arm_angles']                         # the joint states the animation draws the arms from
+        seen = np.isfinite(arms).all(axis=(1, 2))
+        assert seen.mean() > 0.9
+        np.testing.assert_allclose(arms[seen], batch.arms[seen], rtol=0, atol=1e-9)
+        assert (out / scene.key / 'trajectories.png').stat().st_size > 10_000
+        from smarticle_bags.arrays import read_poses
+        from smarticle_bags.reader import BagReader
 
-    recorded = read_poses(BagReader(out / 'bag'))   # the bag holds the same poses the demo analysed
-    assert recorded.xyh.shape[1] == 3 and len(recorded.stamp) >= 0.9 * len(data['time'])
+        recorded = read_poses(BagReader(out / scene.key / 'bag'))   # the bag holds the poses the demo analysed
+        assert len(recorded.stamp) >= 0.9 * len(data['time'])
+    assert sum(counts) == len(run_batch(FEEDBACK, 1, 2.0, windows=stack_windows()).halts)
+    assert (out / 'feedback' / 'halts.png').stat().st_size > 10_000
+    from PIL import Image
+
+    with Image.open(out / 'demo.gif') as gif:
+        assert gif.n_frames >= (3 + 2) * 1.6 / 0.4
+        assert gif.size[0] > 200
 
 
 @pytest.mark.integration
 @pytest.mark.slow
-def test_demo_without_feedback_runs_the_open_loop_gait_only(tmp_path: Path) -> None:
+def test_demo_feedback_part_open_loop_as_separate_processes(tmp_path: Path) -> None:
     out = tmp_path / 'demo'
-    proc = subprocess.run([sys.executable, '-m', 'smarticle_bringup.demo', '--robots', '2', '--periods', '3',
-                           '--no-feedback', '--separate', '--out', str(out)], capture_output=True, text=True,
-                          timeout=300)
+    proc = subprocess.run([sys.executable, '-m', 'smarticle_bringup.demo', '--only', 'feedback', '--no-feedback',
+                           '--feedback-periods', '2', '--separate', '--no-animation', '--out', str(out)],
+                          capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
-    assert 'feedback nodes' not in proc.stdout and 'feedback halts' not in proc.stdout
-    assert 'as separate processes' in proc.stdout
-    assert not list((out / 'logs').glob('feedback-*.log')) and len(list((out / 'logs').glob('gait-*.log'))) == 2
-    assert np.load(out / 'poses.npz')['poses'].shape[1:] == (2, 3)
+    assert 'feedback nodes' not in proc.stdout and 'feedback halts per robot' not in proc.stdout
+    assert 'the controller off (--no-feedback)' in proc.stdout
+    assert 'as separate processes' in proc.stdout and not (out / 'demo.gif').exists()
+    logs = out / 'feedback' / 'logs'
+    assert not list(logs.glob('feedback-*.log')) and len(list(logs.glob('gait-*.log'))) == 2
+    assert np.load(out / 'feedback' / 'poses.npz')['poses'].shape[1:] == (2, 3)
+    assert not (out / 'gliders').exists()
+
+
+@pytest.mark.slow
+def test_the_default_seed_glides_and_travels() -> None:
+    """The demo's default seed, its gliders scene in the batch core: a glider that travels by the demo's rule."""
+    run = run_batch(GLIDERS, 1)
+    gliders = analyse(GLIDERS, run.times, run.poses).gliders
+    assert not run.trouble and any(travelling(g, GLIDERS.spec.body_length) for g in gliders), gliders
+
+
+def test_the_gliders_scene_starts_where_p5_starts_its_pairs() -> None:
+    """Seed s of the demo's gliders scene is seed s of P5's pair start (its spec's jitter) at 0.1 period."""
+    import yaml
+    from smarticle_experiments.trials import pair_start
+
+    spec = yaml.safe_load((ROOT / 'smarticle_experiments' / 'config' / 'experiments' / 'p5.yaml').read_text())
+    for seed in range(10):
+        start = GLIDERS.start_for(seed)
+        assert (start.r_bl, start.theta_deg, start.phi_deg) == pytest.approx(pair_start(spec['params'], seed))
+    assert GLIDERS.start.phases == (0.0, spec['params']['phase2'])
+
+
+@pytest.mark.parametrize('scene', [GLIDERS, FEEDBACK], ids=lambda s: s.key)
+def test_the_sim_bridge_builds_the_scene_the_batch_path_runs(scene: object) -> None:
+    """The demo's bridge parameters make the sim bridge place the robots exactly as the batch twin does."""
+    from smarticle_sim.bridge import BridgeSettings
+
+    for seed in (0, 1, 7):
+        values = scene.bridge_params(seed)          # type: ignore[attr-defined]
+        values.pop('phase_jitter')
+        built = BridgeSettings.defaults(scene='pair', robots=2, seed=seed, **values).scene()
+        assert built.robots == scene.scene(seed).robots   # type: ignore[attr-defined]
+        assert [p['phase'] for p in scene.robot_params(seed)] == list(scene.start_for(seed).phases)  # type: ignore[attr-defined]
+
+
+def test_demo_rule_is_the_documented_one() -> None:
+    """The rule the seed table was run with: bound >= 30 periods under 1.6 BL, travelling >= 0.5 W."""
+    assert (MIN_PERIODS, TRAVEL_MIN_W) == (30, 0.5)
+    config = GLIDERS.glider_config()
+    assert config.r_bind == pytest.approx(1.6 * GLIDERS.spec.body_length)
+    assert FEEDBACK.glider_config().width == FEEDBACK.spec.body_length
+
+
+def test_glider_lines_show_class_lifetime_and_travel() -> None:
+    from smarticle_bringup.demo import glider_lines
+    from smarticle_tracking.gliders import GliderConfig, analyse_gliders
+
+    times, poses = synthetic_pair([True] * 35 + [False] * 5, phi=math.pi, velocity=(0.002, 0.0))
+    config = GliderConfig(min_periods=MIN_PERIODS)
+    gliders = analyse_gliders(times, poses, config).gliders
+    text = glider_lines(gliders, config.width)
+    header, row = text.splitlines()
+    assert 'class' in header and 'lifetime [periods]' in header and 'travel [W]' in header
+    cells = row.split()
+    assert cells[:4] == ['0-1', 'C1', '0', '35'] and cells[-1] == 'yes'
+    assert float(cells[-2]) == pytest.approx(gliders[0].distance / config.width, abs=0.01)
+    assert glider_lines((), 0.054) == '  none'
+
+
+def test_animation_draws_three_links_per_robot_and_the_halts(tmp_path: Path) -> None:
+    from PIL import Image
+    from smarticle_bringup.demo_figures import AnimatedPart, GliderSpan, robot_outlines, write_animation
+
+    outlines = robot_outlines(GLIDERS.spec, (0.0, 0.0, math.pi / 2), (math.pi / 2, math.pi / 2))
+    assert len(outlines) == 3 and all(o.shape == (4, 2) for o in outlines)
+    body_width = np.linalg.norm(outlines[0][0] - outlines[0][1])
+    assert body_width == pytest.approx(GLIDERS.spec.body_width)
+    times, poses = synthetic_pair([True] * 4, n_robots=2)
+    arms = np.zeros((len(times), 2, 2))
+    halts = [(1.0, 0, 'arm1_front')]
+    parts = [AnimatedPart('1 gliders', GLIDERS.spec, times, poses, arms, [GliderSpan(0, 1, 'C1', 0.0, 6.4, 0.1)]),
+             AnimatedPart('2 feedback', GLIDERS.spec, times, poses, arms, (), halts)]
+    path = write_animation(parts, tmp_path / 'a.gif', step=0.4)
+    with Image.open(path) as gif:
+        frames = gif.n_frames
+        gif.seek(0)
+        first = np.asarray(gif.convert('RGB'))
+        gif.seek(frames // 2 + 1)   # part 2, t = 0.4 s: before the halt
+        before = np.asarray(gif.convert('RGB'))
+        gif.seek(frames // 2 + 3)   # part 2, t = 1.2 s: robot 0 holds after its halt at 1.0 s
+        halted = np.asarray(gif.convert('RGB'))
+        gif.seek(frames // 2 + 5)   # part 2, t = 2.0 s: its next period began, it moves again
+        resumed = np.asarray(gif.convert('RGB'))
+    assert frames == 2 * 16
+    blue = np.all(np.abs(first.astype(int) - (0x2a, 0x8c, 0xff)) < 30, axis=-1)    # the C1 glider's colour
+    red = np.all(np.abs(halted.astype(int) - (0xd6, 0x27, 0x28)) < 30, axis=-1)    # a halted robot's outline
+    assert blue.sum() > 100 and red.sum() > 20
+
+    def reds(image: np.ndarray) -> int:
+        return int(np.all(np.abs(image.astype(int) - (0xd6, 0x27, 0x28)) < 30, axis=-1).sum())
+
+    assert reds(before) == 0 and reds(resumed) == 0
+
+
+def test_halts_figure(tmp_path: Path) -> None:
+    from smarticle_bringup.demo_figures import plot_halts
+
+    times, poses = synthetic_pair([True, False, True], n_robots=2)
+    path = plot_halts(times, poses, [(0.5, 0, 'arm1_front'), (2.0, 1, 'arm2_back')], 0.054, tmp_path / 'h.png', 't')
+    assert path.stat().st_size > 10_000
 
 
 def test_clock_noise_gives_each_robot_the_batch_paths_clock_offset(tmp_path: Path) -> None:
     """--clock-noise writes each robot's clock_rate_offset (gait and feedback alike): the batch path's draw."""
     import yaml
-    from smarticle_bringup.demo import build_parser, write_params
+    from smarticle_bringup.demo import build_parser, plan_parts, write_params
     from smarticle_sim.noise import clock_rates
     from smarticle_sim.settings import NoiseConfig
 
     path = tmp_path / 'params.yaml'
-    write_params(build_parser().parse_args(['--robots', '3', '--seed', '4', '--clock-noise']), path)
-    data = yaml.safe_load(path.read_text(encoding='utf-8'))
-    expected = clock_rates(NoiseConfig.paper(), 3, 4)
+    args = build_parser().parse_args(['--seed', '4', '--clock-noise'])
+    expected = clock_rates(NoiseConfig.paper(), 2, 4)
     assert np.any(expected != 0.0)
-    for k in range(3):
-        gait, feedback = (data[f'/smarticle_{k}/{node}']['ros__parameters'] for node in ('gait', 'feedback'))
-        assert gait['clock_rate_offset'] == feedback['clock_rate_offset'] == expected[k]
-        assert gait['phase'] == feedback['phase']
-    write_params(build_parser().parse_args(['--robots', '3', '--seed', '4']), path)
+    for part in plan_parts(args):
+        write_params(part, args, path)
+        data = yaml.safe_load(path.read_text(encoding='utf-8'))
+        assert data['/sim_bridge']['ros__parameters']['preset'] == part.spec.name
+        for k in range(2):
+            gait, feedback = (data[f'/smarticle_{k}/{node}']['ros__parameters'] for node in ('gait', 'feedback'))
+            assert gait['clock_rate_offset'] == feedback['clock_rate_offset'] == expected[k]
+            assert gait['phase'] == feedback['phase']
+            assert gait['servo_speed'] == part.spec.servo_speed
+    args = build_parser().parse_args(['--seed', '4'])
+    write_params(plan_parts(args)[0], args, path)
     data = yaml.safe_load(path.read_text(encoding='utf-8'))
-    assert all('clock_rate_offset' not in data[f'/smarticle_{k}/gait']['ros__parameters'] for k in range(3))
+    assert all('clock_rate_offset' not in data[f'/smarticle_{k}/gait']['ros__parameters'] for k in range(2))
+
+
+def test_dense_start_and_bad_options() -> None:
+    from smarticle_bringup.demo import build_parser, main, plan_parts
+
+    parts = plan_parts(build_parser().parse_args(['--scene', 'dense', '--robots', '5', '--only', 'gliders']))
+    assert [(p.scene_kind, p.robots, p.feedback) for p in parts] == [('dense', 5, False)]
+    assert len({p['phase'] for p in parts[0].own}) == 5          # the dense start's phase jitter
+    assert main(['--phase-offset', '1.5']) == 2
+    assert main(['--periods', '0']) == 2

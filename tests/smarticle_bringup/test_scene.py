@@ -49,3 +49,16 @@ def test_the_scene_draws_seen_robots_trails_and_gliders_and_deletes_what_is_gone
 def test_a_malformed_glider_report_is_refused() -> None:
     with pytest.raises(ValueError, match='malformed'):
         glider_reports([{'i': '0', 'class': 'C9'}])
+
+
+def test_the_outline_of_each_robot_preset() -> None:
+    """The live view draws the robot it is told (view parameter ``preset``): the feedback robot is larger."""
+    from smarticle_bringup.scene import dims_of
+    from smarticle_common.facts import FEEDBACK, SMALL
+
+    assert dims_of('small').body_width == SMALL.body_width and dims_of('small') == SceneBuilder().dims
+    big = dims_of('feedback')
+    assert (big.body_width, big.body_depth, big.arm_length) == (FEEDBACK.body_width, FEEDBACK.body_depth,
+                                                                FEEDBACK.arm_length)
+    with pytest.raises(ValueError, match='feedback, small'):
+        dims_of('huge')
