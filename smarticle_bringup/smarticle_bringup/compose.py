@@ -11,11 +11,11 @@ same node class** that its executable runs (``COMPONENTS``: the stack's registry
 as rclcpp_components registers plugins), built with its own command-line arguments (name, namespace,
 parameter files and values, remappings; the host's global ROS arguments are not applied to them). All
 of them go on one executor (``--executor``: ``single``, rclpy's ``SingleThreadedExecutor``, the default,
-or ``events``, rclpy's experimental ``EventsExecutor``; ``EXECUTORS``). A node with a ``run(executor)`` method (the lock-step sim
-bridge) drives that executor, so every hosted node's callbacks run inside its loop, and the host exits
-with its code when it returns; otherwise the host spins until Ctrl-C. Messages between hosted nodes
-still go through the middleware (rclpy has no intra-process path), but 2N + 2 Python interpreters become
-one and every hand-over stays in one process.
+or ``events``, rclpy's experimental ``EventsExecutor``; ``EXECUTORS``). A node with a ``run(executor)``
+method (the lock-step sim bridge) drives that executor, so every hosted node's callbacks run inside its
+loop, and the host exits with its code when it returns; otherwise the host spins until Ctrl-C. Messages
+between hosted nodes still go through the middleware (rclpy has no intra-process path), but 2N + 2 Python
+interpreters become one and every hand-over stays in one process.
 
 A file with a node that is not composable, or any other bad input, is a one-line error and exit code 2,
 and nothing is started; a node that cannot start (a bad parameter) ends the host with exit code 2.

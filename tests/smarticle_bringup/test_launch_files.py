@@ -163,7 +163,8 @@ def test_substitutions_conditions_groups_and_includes(tmp_path: Path, monkeypatc
 def test_eval_handles_arithmetic_and_refuses_code() -> None:
     assert evaluate('2 + 1 < 4') == 'True' and evaluate('7 // 2') == '3' and evaluate("'a' != ''") == 'True'
     assert evaluate('max(1, int("3")) if True else 0') == '3'
-    assert evaluate("'pkg/exe'.split('/')[0]") == 'pkg' and evaluate("'2' in '0, 2'.replace(' ', '').split(',')") == 'True'
+    assert evaluate("'pkg/exe'.split('/')[0]") == 'pkg'
+    assert evaluate("'2' in '0, 2'.replace(' ', '').split(',')") == 'True'
     assert evaluate("str(1 < 2).lower()") == 'true' and evaluate("'1' not in 'all'.split()") == 'True'
     for bad in ('__import__("os")', 'open("x")', '[1, 2]', '1 +', "'a'.split()", "'a'.join('b')", "(1).real",
                 "'abc'[9]"):
