@@ -409,14 +409,17 @@ class Physics:
         """
         ks = self.robot_list(robots)
         out = np.zeros((len(ks), len(FSR_FACES)))
-        c = self._client
+        # bound once (the client wraps every attribute access); link states only for arms in contact
+        contact_points, link_states = self._client.getContactPoints, self._client.getLinkStates
         for row, k in enumerate(ks):
             body = self.body_ids[k]
-            links = c.getLinkStates(body, ARM_JOINTS)
+            links = None
             for j in ARM_JOINTS:
-                contacts = c.getContactPoints(bodyA=body, linkIndexA=j)
+                contacts = contact_points(bodyA=body, linkIndexA=j)
                 if not contacts:
                     continue
+                if links is None:
+                    links = link_states(body, ARM_JOINTS)
                 qx, qy, qz, qw = links[j][1]
                 front = (2.0 * (qx * qy - qw * qz), 1.0 - 2.0 * (qx * qx + qz * qz),
                          2.0 * (qy * qz + qw * qx))
