@@ -84,6 +84,7 @@ class SimBridgeNode(Node):
             start.stamp = Time(nanoseconds=round(self.settings.start_at * 1e9)).to_msg()
             self.start_pub.publish(start)
         self.counts: dict[str, int] = {}
+        self.commands_received = 0
         self.reported: set[tuple[str, int]] = set()   # (cause, robot) of bad inputs already logged
         self.warned_ids: set[int] = set()
         #: hold:=true: the sim time (ns) up to which a test lets the lock-step run (None: not yet given).
@@ -102,6 +103,7 @@ class SimBridgeNode(Node):
     # ------------------------------------------------------------------ callbacks
     def on_command(self, robot: int, msg: Any) -> None:
         """Hand a joint command to the core; report what it dropped or changed."""
+        self.commands_received += 1
         stamp = Time.from_msg(msg.header.stamp).nanoseconds
         checked = self.core.apply_command(robot, list(msg.name), list(msg.position), list(msg.velocity),
                                           stamp)
@@ -252,6 +254,8 @@ class SimBridgeNode(Node):
         wall0 = time.monotonic()
         self.publish_outputs()
         first = True
+        physics_wall = 0.0   # wall seconds inside the physics (advance), against the time in messages and nodes
+        cpu0 = time.process_time()   # CPU seconds of this process (every thread): steadier than wall when shared
         while rclpy.ok():
             if settings.lockstep:
                 missed = self.wait_for_commands(executor, first)
@@ -260,14 +264,16 @@ class SimBridgeNode(Node):
                     self.publish_diagnostics(2, missed, 0.0)
                     return 4
                 if first:  # the real-time factor counts from the moment every gait node has answered
-                    wall0, first = time.monotonic(), False
+                    wall0, cpu0, first, physics_wall = time.monotonic(), time.process_time(), False, 0.0
             else:
                 for _ in range(self.core.n_robots + 4):
                     executor.spin_once(timeout_sec=0.0)
             if end_ns is not None and self.core.time_ns >= end_ns:
                 break
             try:
+                stepping = time.monotonic()
                 self.core.advance()
+                physics_wall += time.monotonic() - stepping
             except SimTrouble as trouble:
                 self.get_logger().error(str(trouble))
                 self.publish_diagnostics(2, str(trouble), 0.0)
@@ -282,8 +288,12 @@ class SimBridgeNode(Node):
                 rtf = (self.core.time - sim0) / max(wall - wall0, 1e-9)
                 self.publish_diagnostics(0, 'running', rtf)
                 last_diag = wall
-        rtf = (self.core.time - sim0) / max(time.monotonic() - wall0, 1e-9)
-        self.get_logger().info(f'done at sim time {self.core.time:.2f} s, real-time factor {rtf:.2f}')
+        wall = max(time.monotonic() - wall0, 1e-9)
+        rtf = (self.core.time - sim0) / wall
+        per_cpu = (self.core.time - sim0) / max(time.process_time() - cpu0, 1e-9)
+        self.get_logger().info(f'done at sim time {self.core.time:.2f} s, real-time factor {rtf:.2f} ({per_cpu:.2f} '
+                               f'per CPU second of this process; physics steps and FSR: '
+                               f'{min(physics_wall / wall, 1.0):.0%} of the wall time)')
         self.publish_diagnostics(0, 'finished', rtf)
         return 0
 
@@ -317,8 +327,10 @@ class SimBridgeNode(Node):
         timeout = self.settings.start_timeout if first else self.settings.tick_timeout
         started = last = time.monotonic()
         told = 0.0   # wall time of the last 'held' diagnostics
+        seen = -1    # commands received when ``missing`` was last computed (only a command can shorten it)
         while rclpy.ok():
-            missing = self.core.waiting_for()
+            if seen != self.commands_received:
+                seen, missing = self.commands_received, self.core.waiting_for()
             held = self.held()
             if not missing and not held:
                 return None
