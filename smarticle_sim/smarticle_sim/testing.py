@@ -182,7 +182,8 @@ class SimWorld:
         if gliders:
             self.node('smarticle_tracking/glider_monitor', params={'use_sim_time': True, 'show_arms': False})
         bridge_params = {'preset': preset, 'scene': scene, 'robots': robots, 'seed': seed, 'mode': 'lockstep',
-                         'duration': float(duration), 'hold': True, 'wait_for_subscribers': 1,
+                         'duration': float(duration), 'hold': True,
+                         'wait_for_subscribers': 2 if gliders else 1,   # the probe (and the glider monitor)
                          **({} if tick_timeout is None else {'tick_timeout': float(tick_timeout)}), **(params or {})}
         self.bridge = self.procs.start(node_executable('smarticle_sim/sim_bridge'), *ros_args(params=bridge_params))
         self.started['/sim_bridge'] = self.bridge
@@ -225,9 +226,10 @@ class SimWorld:
         diagnostics = topics.spec_of('diagnostics')
         self.probe.create_subscription(message(diagnostics.type), diagnostics.resolve(), self._on_diagnostics,
                                        QoSProfile(depth=1000))
-        if gliders:
-            self.probe.create_subscription(message(topics.spec_of('gliders').type), topics.topic('gliders'),
-                                           self._on_gliders, QoSProfile(depth=1000))
+        if gliders:   # the first step also waits for the glider monitor's reports to reach the probe
+            self.matched.append(self.probe.create_subscription(
+                message(topics.spec_of('gliders').type), topics.topic('gliders'), self._on_gliders,
+                QoSProfile(depth=1000)))
 
     def _on_halt(self, robot: int, msg: Any) -> None:
         self.data.halts.append((_stamp(msg.stamp), robot, msg.frame_id))
@@ -276,7 +278,7 @@ class SimWorld:
             deadline = time.monotonic() + STEP_SLACK
             while any(sub.get_publisher_count() == 0 for sub in self.matched):
                 if time.monotonic() > deadline:
-                    raise SimError('the feedback nodes did not come up: no publisher of /smarticle_<k>/halt')
+                    raise SimError('the feedback nodes or the glider monitor did not come up in time')
                 self.executor.spin_once(timeout_sec=0.05)
             self.matched = []
         header = topics.message_class('std_msgs/msg/Header')()
