@@ -27,7 +27,7 @@ import math
 import os
 import sys
 import time
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -260,6 +260,13 @@ class SimWorld:
         deadline = time.monotonic() + seconds
         while time.monotonic() < deadline:
             self.executor.spin_once(timeout_sec=min(0.02, max(deadline - time.monotonic(), 0.0)))
+
+    def spin_until(self, predicate: Callable[[], bool], timeout: float) -> bool:
+        """Let the probe receive until ``predicate()`` holds or ``timeout`` wall seconds pass; the predicate."""
+        deadline = time.monotonic() + timeout
+        while not predicate() and time.monotonic() < deadline:
+            self.executor.spin_once(timeout_sec=0.02)
+        return predicate()
 
     def sim_time(self) -> float:
         """The bridge's sim time (s) as its diagnostics last said (-1 before its first)."""

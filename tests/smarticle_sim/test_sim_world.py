@@ -98,7 +98,8 @@ def test_step_to_raises_sim_stopped_with_that_line(tmp_path: Path) -> None:
 def test_bad_commands_are_counted_logged_once_and_the_other_robot_runs_on(sim_world: SimWorld) -> None:
     sim_world.start(scene='pair', robots=2, controller=[GAIT, FAULTY], controller_params={'bad_at': 0.3})
     sim_world.step_to(1.0)
-    sim_world.spin(2.5)           # the bridge scans for unknown robots every 2 s (wall) and reports while held
+    # the bridge looks for unknown robots every 2 s (wall) and reports its counters every second while held
+    assert sim_world.spin_until(lambda: 'unknown_robot_ids' in sim_world.counters(), 10.0), sim_world.output()
     counters = sim_world.counters()
     assert counters['nonfinite_targets'] == 1 and counters['future_stamps'] == 1, counters
     assert counters['unknown_robot_ids'] == 1, counters
