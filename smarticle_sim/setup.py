@@ -28,5 +28,7 @@ setup(
             'smarticle-sim = smarticle_sim.cli:main',
             'sim_bridge = smarticle_sim.sim_bridge_node:main',
         ],
+        # the sim_world fixture: a lock-step sim and the user's nodes for a test (docs/own_controller.md)
+        'pytest11': ['smarticle_sim = smarticle_sim.testing'],
     },
 )

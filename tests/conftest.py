@@ -1,7 +1,8 @@
 """Shared fixtures: an isolated DDS domain per test run and real node processes (helpers: tests/helpers/).
 
-Tiers: a test that uses the ``nodes`` or ``ros_node`` fixture starts real nodes or talks over DDS and is
-marked ``integration`` automatically; ``./test.sh -m "not integration"`` runs the fast tier."""
+Tiers: a test that uses the ``nodes``, ``ros_node`` or ``sim_world`` (smarticle_sim.testing) fixture starts
+real nodes or talks over DDS and is marked ``integration`` automatically; ``./test.sh -m "not integration"``
+runs the fast tier."""
 
 from __future__ import annotations
 
@@ -67,7 +68,7 @@ def ros_node() -> Iterator[Callable[[str], object]]:
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """Mark every test that starts real nodes or joins DDS (``nodes``, ``ros_node``) as integration."""
+    """Mark every test that starts real nodes or joins DDS (``nodes``, ``ros_node``, ``sim_world``) as integration."""
     for item in items:
-        if {'nodes', 'ros_node'} & set(getattr(item, 'fixturenames', ())):
+        if {'nodes', 'ros_node', 'sim_world'} & set(getattr(item, 'fixturenames', ())):
             item.add_marker(pytest.mark.integration)

@@ -24,11 +24,13 @@ LAYERS: dict[str, int] = {
     'smarticle_bags': 2,
     'smarticle_experiments': 3,
     'smarticle_bringup': 3,
+    'smarticle_example_controller': 4,    # examples/: a user's own package, on top of the stack
 }
 
 #: The folders of each package's code (its Python package and its scripts).
 PACKAGE_DIRS: dict[str, Path] = {
-    name: (ROOT / 'bags' / name if name == 'smarticle_bags' else ROOT / name) for name in LAYERS
+    name: (ROOT / 'bags' / name if name == 'smarticle_bags' else
+           ROOT / 'examples' / name if name == 'smarticle_example_controller' else ROOT / name) for name in LAYERS
 }
 
 

@@ -37,6 +37,7 @@ ROSDEP_KEYS: dict[str, str] = {
     'pybullet_utils': 'python3-pybullet-pip',
     'zstandard': 'python3-zstandard',
     'lz4': 'python3-lz4',
+    'pytest': 'python3-pytest',
     'mcap': 'python3-mcap-pip',
     'mcap_ros2': 'python3-mcap-ros2-support-pip',
     'foxglove': 'python3-foxglove-sdk-pip',
@@ -46,7 +47,8 @@ ROSDEP_KEYS: dict[str, str] = {
 #: ROS 2 packages the code imports by their own name (client library, message packages).
 ROS_PACKAGES = {'rclpy', 'std_msgs', 'sensor_msgs', 'geometry_msgs', 'diagnostic_msgs', 'visualization_msgs',
                 'rosgraph_msgs', 'rcl_interfaces', 'lifecycle_msgs', 'builtin_interfaces', 'ament_index_python'}
-PACKAGE_XMLS = sorted(ROOT.glob('*/package.xml')) + sorted(ROOT.glob('bags/*/package.xml'))
+PACKAGE_XMLS = (sorted(ROOT.glob('*/package.xml')) + sorted(ROOT.glob('bags/*/package.xml'))
+                + sorted(ROOT.glob('examples/*/package.xml')))
 OURS = {p.parent.name for p in PACKAGE_XMLS}
 
 
@@ -74,7 +76,8 @@ def imported(folder: Path, package: str) -> dict[str, str]:
                 needs.setdefault(key, str(path.relative_to(ROOT)))
     for path in sorted((folder / 'launch').glob('*.launch.xml')):     # nodes its launch files start
         for node in ET.parse(path).getroot().iter('node'):
-            needs.setdefault(node.attrib['pkg'], str(path.relative_to(ROOT)))
+            if '$(' not in node.attrib['pkg']:      # a user's package, given as a launch argument
+                needs.setdefault(node.attrib['pkg'], str(path.relative_to(ROOT)))
     needs.pop(package, None)
     return needs
 

@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
 # Create (or refresh) the project's virtual environment in .venv and install everything into it:
-# the PyPI dependencies from requirements-dev.txt and the six ROS 2 packages, editable.
+# the PyPI dependencies from requirements-dev.txt, the ROS 2 packages of the stack and the example controller
+# (examples/), editable.
 # Sourced by demo.sh and test.sh; safe to run again (it only reinstalls when the project files change).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 VENV="${SMARTICLE_VENV:-$ROOT/.venv}"
 PY="${PYTHON:-python3}"
-PACKAGES=(smarticle_common smarticle_driver smarticle_sim smarticle_feedback smarticle_tracking bags/smarticle_bags smarticle_experiments smarticle_bringup)
+PACKAGES=(smarticle_common smarticle_driver smarticle_sim smarticle_feedback smarticle_tracking bags/smarticle_bags smarticle_experiments smarticle_bringup
+          examples/smarticle_example_controller)
 
 stamp_of() {
   # everything that changes what gets installed

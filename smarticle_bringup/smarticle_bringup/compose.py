@@ -3,18 +3,19 @@
 Usage::
 
     smarticle-compose smarticle_bringup/launch/sim_stack.launch.xml robots:=7 duration:=20.0
-    smarticle-compose smarticle_bringup sim_stack.launch.xml robots:=7 [--ros-args ...]
+    smarticle-compose smarticle_bringup sim_stack.launch.xml robots:=7 [--executor events] [--ros-args ...]
 
 A launch file says which nodes to host (``launch_files.resolve``: the same file ``sim.launch.xml``
 includes as separate processes when ``composed:=false``). Each ``<node>`` becomes an instance of **the
 same node class** that its executable runs (``COMPONENTS``: the stack's registry of composable nodes,
 as rclcpp_components registers plugins), built with its own command-line arguments (name, namespace,
 parameter files and values, remappings; the host's global ROS arguments are not applied to them). All
-of them go on one ``SingleThreadedExecutor``. A node with a ``run(executor)`` method (the lock-step sim
-bridge) drives that executor, so every hosted node's callbacks run inside its loop, and the host exits
-with its code when it returns; otherwise the host spins until Ctrl-C. Messages between hosted nodes
-still go through the middleware (rclpy has no intra-process path), but 2N + 2 Python interpreters become
-one and every hand-over stays in one process.
+of them go on one executor (``--executor``: ``single``, rclpy's ``SingleThreadedExecutor``, the default,
+or ``events``, rclpy's experimental ``EventsExecutor``; ``EXECUTORS``). A node with a ``run(executor)``
+method (the lock-step sim bridge) drives that executor, so every hosted node's callbacks run inside its
+loop, and the host exits with its code when it returns; otherwise the host spins until Ctrl-C. Messages
+between hosted nodes still go through the middleware (rclpy has no intra-process path), but 2N + 2 Python
+interpreters become one and every hand-over stays in one process.
 
 A file with a node that is not composable, or any other bad input, is a one-line error and exit code 2,
 and nothing is started; a node that cannot start (a bad parameter) ends the host with exit code 2.
@@ -39,6 +40,18 @@ COMPONENTS: dict[tuple[str, str], str] = {
 }
 
 NAME = 'smarticle-compose'
+
+#: --executor choices: name -> "module:Class" of an rclpy executor.
+EXECUTORS: dict[str, str] = {
+    'single': 'rclpy.executors:SingleThreadedExecutor',
+    'events': 'rclpy.experimental:EventsExecutor',
+}
+
+
+def executor_class(name: str) -> Callable[[], Any]:
+    """The executor class of ``--executor name`` (KeyError if unknown)."""
+    module, _, cls = EXECUTORS[name].partition(':')
+    return getattr(importlib.import_module(module), cls)
 
 
 def component_class(package: str, executable: str) -> Callable[..., Any]:
@@ -125,12 +138,20 @@ def main(argv: list[str] | None = None) -> int:
     if not words or words[0] in ('-h', '--help'):
         print(__doc__)
         return 0 if words else 2
+    executor = 'single'
+    if '--executor' in words:
+        at = words.index('--executor')
+        if at + 1 >= len(words) or words[at + 1] not in EXECUTORS:
+            print(f'{NAME}: --executor takes one of: {", ".join(EXECUTORS)}', file=sys.stderr)
+            return 2
+        executor = words[at + 1]
+        words = words[:at] + words[at + 2:]
     try:
         actions = plan_nodes(words)
     except LaunchFileError as err:
         print(f'{NAME}: {err}', file=sys.stderr)
         return 2
-    return host(actions, [NAME, *ros_args])
+    return host(actions, [NAME, *ros_args], executor_class(executor))
 
 
 def entry() -> None:

@@ -200,13 +200,20 @@ _EVAL_BINARY: dict[type, Callable[[Any, Any], Any]] = {
     ast.FloorDiv: operator.floordiv, ast.Mod: operator.mod}
 _EVAL_COMPARE: dict[type, Callable[[Any, Any], Any]] = {
     ast.Eq: operator.eq, ast.NotEq: operator.ne, ast.Lt: operator.lt, ast.LtE: operator.le,
-    ast.Gt: operator.gt, ast.GtE: operator.ge}
+    ast.Gt: operator.gt, ast.GtE: operator.ge, ast.In: lambda a, b: operator.contains(b, a),
+    ast.NotIn: lambda a, b: not operator.contains(b, a)}
 _EVAL_CALLS: dict[str, Callable[..., Any]] = {'int': int, 'float': float, 'str': str, 'min': min, 'max': max,
                                               'abs': abs}
+#: String methods ``$(eval)`` may call (to split a ``package/executable`` or a ``0,2`` list argument).
+_EVAL_METHODS = {'split', 'strip', 'lower', 'replace'}
 
 
 def evaluate(expression: str) -> str:
-    """``$(eval ...)``: a small Python expression of numbers, strings and booleans; the result as text."""
+    """``$(eval ...)``: a small Python expression of numbers, strings and booleans; the result as text.
+
+    Strings may be split (``'a/b'.split('/')[0]``, ``'1' in '0,1'.split(',')``), stripped and lowered; the
+    result must be a number, a string or a boolean.
+    """
     def walk(node: ast.AST) -> Any:
         if isinstance(node, ast.Expression):
             return walk(node.body)
@@ -238,10 +245,24 @@ def evaluate(expression: str) -> str:
         if (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in _EVAL_CALLS
                 and not node.keywords):
             return _EVAL_CALLS[node.func.id](*(walk(a) for a in node.args))
+        if (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr in _EVAL_METHODS
+                and not node.keywords):
+            target = walk(node.func.value)
+            if not isinstance(target, str):
+                raise ValueError(f'.{node.func.attr}() applies to strings only')
+            return getattr(target, node.func.attr)(*(walk(a) for a in node.args))
+        if isinstance(node, ast.Subscript):
+            sequence, index = walk(node.value), walk(node.slice)
+            if not isinstance(sequence, (str, list)) or isinstance(index, bool) or not isinstance(index, int):
+                raise ValueError('only a string or a split string may be indexed, by an integer')
+            return sequence[index]
         raise ValueError(f'{type(node).__name__} is not supported in $(eval)')
     try:
-        return str(walk(ast.parse(expression.strip(), mode='eval')))
-    except (SyntaxError, ValueError, TypeError, ZeroDivisionError) as err:
+        result = walk(ast.parse(expression.strip(), mode='eval'))
+        if not isinstance(result, (int, float, str, bool)):
+            raise ValueError(f'the result must be a number, a string or a boolean, not {type(result).__name__}')
+        return str(result)
+    except (SyntaxError, ValueError, TypeError, ZeroDivisionError, IndexError) as err:
         raise ValueError(f'$(eval {expression!r}): {err}') from None
 
 

@@ -146,6 +146,9 @@ TOPICS: tuple[TopicSpec, ...] = (
               '', '', 'every node', 'faults and counters (serial errors, bad messages, trouble)'),
     TopicSpec('clock', '/clock', 'rosgraph_msgs/msg/Clock', Qos.CLOCK,
               '', 's', 'sim bridge', 'simulation time for use_sim_time'),
+    TopicSpec('run_until', '/sim_bridge/run_until', 'std_msgs/msg/Header', Qos.LATCHED,
+              '', 's (stamp)', 'a test (smarticle_sim.testing)',
+              'lock-step sim bridge with hold:=true: run up to this sim time, then wait for a later one'),
 )
 
 BY_KEY: dict[str, TopicSpec] = {spec.key: spec for spec in TOPICS}

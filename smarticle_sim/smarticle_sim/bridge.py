@@ -32,6 +32,8 @@ from .physics import FsrReading, Physics
 from .runner import Runner
 
 NODE_NAME = 'sim_bridge'
+#: Default wall seconds the lock-step bridge waits for a tick's joint commands (the first tick: the nodes' start).
+TICK_TIMEOUT, START_TIMEOUT = 10.0, 120.0
 _PHYSICS = PhysicsConfig()
 
 #: Every parameter of the sim bridge node, declared once (node) and shipped as config/sim_bridge.yaml.
@@ -91,6 +93,13 @@ PARAMS: tuple[ParamSpec, ...] = (
               '(fraction)', 0.0, 0.95),
     ParamSpec('camera_backend', 'opencv', f'rendering path: {", ".join(BACKENDS)} (opencv is faster)'),
     ParamSpec('camera_seed', 0, 'seed of the camera noise'),
+    ParamSpec('tick_timeout', TICK_TIMEOUT, 'lock-step: wall seconds to wait for a robot\'s joint command of a tick '
+              '(after the first); then the bridge stops with one line naming the node and the tick '
+              '(exit code 4; 0 = wait forever)', 0.0, 3600.0),
+    ParamSpec('start_timeout', START_TIMEOUT, 'lock-step: the same for the first tick, which also waits for '
+              'the nodes to start (0 = wait forever)', 0.0, 3600.0),
+    ParamSpec('hold', False, 'lock-step: also wait at every tick until /sim_bridge/run_until allows it (a '
+              'std_msgs/Header whose stamp is the sim time to run up to): a test steps the sim to a time'),
     ParamSpec('wait_for_camera_subscribers', 0, 'before stepping, also wait until /overhead_camera/image_raw '
               'has this many subscribers', 0, 100),
 )
@@ -119,6 +128,9 @@ class BridgeSettings:
     camera: CameraConfig
     camera_rate: float
     wait_for_camera_subscribers: int
+    tick_timeout: float = TICK_TIMEOUT     # wall s; 0 = forever
+    start_timeout: float = START_TIMEOUT   # wall s; 0 = forever
+    hold: bool = False
 
     @property
     def ticks_per_publish(self) -> int:
@@ -163,7 +175,8 @@ class BridgeSettings:
             values['duration'], values['start_at'],
             (values['pose_noise_xy'], math.radians(values['pose_noise_heading_deg'])),
             values['noise_seed'], math.radians(values['joint_limit_deg']), values['wait_for_subscribers'],
-            camera, values['camera_rate'], values['wait_for_camera_subscribers'])
+            camera, values['camera_rate'], values['wait_for_camera_subscribers'],
+            tick_timeout=values['tick_timeout'], start_timeout=values['start_timeout'], hold=values['hold'])
         settings.ticks_per_publish  # noqa: B018 - validates publish_period against the control tick
         return settings
 
@@ -245,6 +258,11 @@ class SimBridgeCore:
     def apply_command(self, robot: int, names: list[str], positions: list[float],
                       velocities: list[float], stamp_ns: int) -> CheckedCommand:
         """Check a joint command for ``robot`` and hand its usable part to the physics."""
+        if stamp_ns > self.time_ns:   # a command for a time not reached: lock-step would skip that tick
+            out = CheckedCommand()
+            out.flag('future_stamps', f'joint command stamped {stamp_ns * 1e-9:.6f} s, after the sim time '
+                                      f'{self.time_ns * 1e-9:.6f} s: ignored')
+            return out
         servo = self.settings.sim.robot.servo_speed
         checked = check_command(names, positions, velocities, self.limits, servo, servo)
         if checked.targets:

@@ -407,16 +407,22 @@ class Physics:
         i.e. the arm link's +y side) when its force pushes the arm toward -y, else toward ``back``; only
         the component of the contact force along the face normal counts.
         """
-        ks = self.robot_list(robots)
+        return self._fsr_of(self.robot_list(robots))
+
+    def _fsr_of(self, ks: list[int]) -> np.ndarray:
+        """``fsr`` of robots ``ks`` already checked (``FsrReading`` calls it every physics step)."""
         out = np.zeros((len(ks), len(FSR_FACES)))
-        c = self._client
+        # bound once (the client wraps every attribute access); link states only for arms in contact
+        contact_points, link_states = self._client.getContactPoints, self._client.getLinkStates
         for row, k in enumerate(ks):
             body = self.body_ids[k]
-            links = c.getLinkStates(body, ARM_JOINTS)
+            links = None
             for j in ARM_JOINTS:
-                contacts = c.getContactPoints(bodyA=body, linkIndexA=j)
+                contacts = contact_points(bodyA=body, linkIndexA=j)
                 if not contacts:
                     continue
+                if links is None:
+                    links = link_states(body, ARM_JOINTS)
                 qx, qy, qz, qw = links[j][1]
                 front = (2.0 * (qx * qy - qw * qz), 1.0 - 2.0 * (qx * qx + qz * qz),
                          2.0 * (qy * qz + qw * qx))
@@ -553,7 +559,7 @@ class FsrReading:
 
     def step(self) -> np.ndarray:
         """(len(robots), 4) reading after the step just taken: the mean force of the last ``steps`` steps."""
-        forces = self.physics.fsr(self.robots)
+        forces = self.physics._fsr_of(self.robots)   # the robots were checked once, in the constructor
         if self.steps > 1:
             self._history[self._next] = forces
             self._next = (self._next + 1) % self.steps

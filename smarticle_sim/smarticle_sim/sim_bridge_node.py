@@ -84,7 +84,15 @@ class SimBridgeNode(Node):
             start.stamp = Time(nanoseconds=round(self.settings.start_at * 1e9)).to_msg()
             self.start_pub.publish(start)
         self.counts: dict[str, int] = {}
+        self.commands_received = 0
+        self.reported: set[tuple[str, int]] = set()   # (cause, robot) of bad inputs already logged
         self.warned_ids: set[int] = set()
+        #: hold:=true: the sim time (ns) up to which a test lets the lock-step run (None: not yet given).
+        self.run_until_ns: int | None = None
+        if self.settings.hold:
+            run_until = topics.spec_of('run_until')
+            self.create_subscription(topics.message_class(run_until.type), run_until.resolve(), self.on_run_until,
+                                     topics.qos_profile(run_until.qos))
         self.create_timer(2.0, self.scan_for_unknown_robots, clock=rclpy.clock.Clock())
         self.get_logger().info(
             f'{n} robots, scene {self.settings.scene_kind}, '
@@ -95,13 +103,29 @@ class SimBridgeNode(Node):
     # ------------------------------------------------------------------ callbacks
     def on_command(self, robot: int, msg: Any) -> None:
         """Hand a joint command to the core; report what it dropped or changed."""
+        self.commands_received += 1
         stamp = Time.from_msg(msg.header.stamp).nanoseconds
         checked = self.core.apply_command(robot, list(msg.name), list(msg.position), list(msg.velocity),
                                           stamp)
         for counter, count in checked.counts.items():
             self.counts[counter] = self.counts.get(counter, 0) + count
-        for warning in checked.warnings:
-            self.get_logger().warning(f'robot {robot}: {warning}', throttle_duration_sec=2.0)
+        for counter in checked.counts:
+            self.report_once(counter, robot, topics.topic('joint_commands', robot), '; '.join(checked.warnings))
+
+    # ------------------------------------------------------------------ bad input
+    def publishers_of(self, topic: str) -> str:
+        """The nodes publishing ``topic``, by full name (who sent a bad or a missing message)."""
+        names = sorted({f'{i.node_namespace.rstrip("/")}/{i.node_name}'
+                        for i in self.get_publishers_info_by_topic(topic)})
+        return ', '.join(names) if names else f'no node publishes {topic}'
+
+    def report_once(self, cause: str, robot: int, topic: str, problem: str) -> None:
+        """Log a bad input once per cause and robot, naming the node that sent it (counted on /diagnostics)."""
+        if (cause, robot) in self.reported:
+            return
+        self.reported.add((cause, robot))
+        self.get_logger().warning(f'{self.publishers_of(topic)} (robot {robot}): {problem} [{cause}: counted on '
+                                  '/diagnostics, logged once]')
 
     def scan_for_unknown_robots(self) -> None:
         """Warn (once per id) about joint commands published for robots the scene does not have."""
@@ -113,8 +137,16 @@ class SimBridgeNode(Node):
             if k >= self.core.n_robots and k not in self.warned_ids and self.count_publishers(name) > 0:
                 self.warned_ids.add(k)
                 self.counts['unknown_robot_ids'] = self.counts.get('unknown_robot_ids', 0) + 1
-                self.get_logger().warning(f'commands on {name} dropped: the scene has robots '
-                                          f'0..{self.core.n_robots - 1} only')
+                self.report_once('unknown_robot_ids', k, name, f'commands on {name} dropped: the scene has robots '
+                                 f'0..{self.core.n_robots - 1} only')
+
+    def on_run_until(self, msg: Any) -> None:
+        """hold:=true: a test lets the sim run up to ``msg.stamp``."""
+        self.run_until_ns = Time.from_msg(msg.stamp).nanoseconds
+
+    def held(self) -> bool:
+        """hold:=true: the current time is not before the time a test allowed (or none is given yet)."""
+        return self.settings.hold and (self.run_until_ns is None or self.core.time_ns >= self.run_until_ns)
 
     # ------------------------------------------------------------------ outputs
     def publish_outputs(self) -> None:
@@ -222,18 +254,26 @@ class SimBridgeNode(Node):
         wall0 = time.monotonic()
         self.publish_outputs()
         first = True
+        physics_wall = 0.0   # wall seconds inside the physics (advance), against the time in messages and nodes
+        cpu0 = time.process_time()   # CPU seconds of this process (every thread): steadier than wall when shared
         while rclpy.ok():
             if settings.lockstep:
-                self.wait_for_commands(executor)
+                missed = self.wait_for_commands(executor, first)
+                if missed is not None:
+                    self.get_logger().error(missed)
+                    self.publish_diagnostics(2, missed, 0.0)
+                    return 4
                 if first:  # the real-time factor counts from the moment every gait node has answered
-                    wall0, first = time.monotonic(), False
+                    wall0, cpu0, first, physics_wall = time.monotonic(), time.process_time(), False, 0.0
             else:
                 for _ in range(self.core.n_robots + 4):
                     executor.spin_once(timeout_sec=0.0)
             if end_ns is not None and self.core.time_ns >= end_ns:
                 break
             try:
+                stepping = time.monotonic()
                 self.core.advance()
+                physics_wall += time.monotonic() - stepping
             except SimTrouble as trouble:
                 self.get_logger().error(str(trouble))
                 self.publish_diagnostics(2, str(trouble), 0.0)
@@ -248,8 +288,12 @@ class SimBridgeNode(Node):
                 rtf = (self.core.time - sim0) / max(wall - wall0, 1e-9)
                 self.publish_diagnostics(0, 'running', rtf)
                 last_diag = wall
-        rtf = (self.core.time - sim0) / max(time.monotonic() - wall0, 1e-9)
-        self.get_logger().info(f'done at sim time {self.core.time:.2f} s, real-time factor {rtf:.2f}')
+        wall = max(time.monotonic() - wall0, 1e-9)
+        rtf = (self.core.time - sim0) / wall
+        per_cpu = (self.core.time - sim0) / max(time.process_time() - cpu0, 1e-9)
+        self.get_logger().info(f'done at sim time {self.core.time:.2f} s, real-time factor {rtf:.2f} ({per_cpu:.2f} '
+                               f'per CPU second of this process; physics steps and FSR: '
+                               f'{min(physics_wall / wall, 1.0):.0%} of the wall time)')
         self.publish_diagnostics(0, 'finished', rtf)
         return 0
 
@@ -273,15 +317,31 @@ class SimBridgeNode(Node):
             while rclpy.ok() and time.monotonic() < settle:
                 executor.spin_once(timeout_sec=0.05)
 
-    def wait_for_commands(self, executor: SingleThreadedExecutor) -> None:
-        """Lock-step barrier: spin until every robot's command for the current time has arrived."""
+    def wait_for_commands(self, executor: SingleThreadedExecutor, first: bool = False) -> str | None:
+        """Lock-step barrier: spin until every robot's command for the current time has arrived (and, with
+        hold:=true, a test allows the step); None, or the line saying which node missed the tick.
+
+        A robot whose command has not come within ``tick_timeout`` wall seconds (``start_timeout`` for the
+        first tick, which also waits for the nodes to start) ends the wait with that line.
+        """
+        timeout = self.settings.start_timeout if first else self.settings.tick_timeout
         started = last = time.monotonic()
+        told = 0.0   # wall time of the last 'held' diagnostics
+        seen = -1    # commands received when ``missing`` was last computed (only a command can shorten it)
         while rclpy.ok():
-            missing = self.core.waiting_for()
-            if not missing:
-                return
+            if seen != self.commands_received:
+                seen, missing = self.commands_received, self.core.waiting_for()
+            held = self.held()
+            if not missing and not held:
+                return None
+            now = time.monotonic()
+            if held and now - told >= 1.0:   # tell the test where the sim stands (its counters too), each second
+                told = now
+                self.publish_diagnostics(0, 'held', 0.0)
             executor.spin_once(timeout_sec=0.005)
             now = time.monotonic()
+            if missing and timeout > 0.0 and now - started > timeout:
+                return self.missed_tick(missing, timeout)
             if now - last > 0.5:  # a gait node that joined late missed the (best-effort) clock: resend
                 clock = self.Clock()
                 clock.clock = Time(nanoseconds=self.core.time_ns).to_msg()
@@ -291,6 +351,14 @@ class SimBridgeNode(Node):
                 if now - started > 5.0:
                     self.get_logger().warning(f'lock-step: waiting for joint commands of robots {missing} '
                                               f'at sim time {self.core.time:.3f} s', throttle_duration_sec=5.0)
+        return None
+
+    def missed_tick(self, missing: list[int], timeout: float) -> str:
+        """The one line of a missed tick: which node (robot) did not answer which tick, how long it was given."""
+        period_ns = round(self.settings.publish_period * 1e9)
+        who = '; '.join(f'{self.publishers_of(topics.topic("joint_commands", k))} (robot {k})' for k in missing)
+        return (f'lock-step: {who} sent no joint command for the tick at sim time {self.core.time:.3f} s '
+                f'(tick {self.core.time_ns // period_ns}) within {timeout:g} s: stopping')
 
 
 def main(args: list[str] | None = None) -> None:

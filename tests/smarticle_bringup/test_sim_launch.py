@@ -124,3 +124,35 @@ def test_the_live_view_sends_scene_updates_for_every_robot(tmp_path: Path) -> No
         out = proc.communicate(timeout=30)[0]
     assert proc.returncode == 0, out
     assert 'serving the live view on ws://127.0.0.1' in logs(tmp_path, 'view')
+
+
+def test_the_controller_argument_runs_the_example_controller_in_place_of_the_gait(ros_node: Any,
+                                                                                  tmp_path: Path) -> None:
+    """controller:=smarticle_example_controller/square_stop: the lock-step runs to its end on the example's
+    commands (its own amplitude, 60 deg, not the gait's 90), composed with the user's nodes beside the host."""
+    import math
+
+    from sensor_msgs.msg import JointState
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+
+    from geometry_msgs.msg import PoseArray
+
+    node = ros_node('controller_probe')
+    targets: list[tuple[float, ...]] = []
+    commands = node.create_subscription(JointState, topics.topic('joint_commands', 1),
+                                        lambda m: targets.append(tuple(m.position)),
+                                        QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
+    # the sim waits for this probe's poses subscription (and the glider monitor's); the probe for the controller
+    node.create_subscription(PoseArray, topics.topic('poses'), lambda m: None,
+                             QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT))
+    proc = launch(tmp_path, 'example', 'robots:=2', 'scene:=pair', 'feedback:=none', 'duration:=2.5',
+                  'controller:=smarticle_example_controller/square_stop', 'wait_for_subscribers:=2')
+    assert spin_until(node, lambda: commands.get_publisher_count() > 0, 60.0), logs(tmp_path, 'example')
+    finished = spin_until(node, lambda: proc.poll() is not None, 90.0)
+    out = proc.communicate(timeout=30)[0] if finished else ''
+    assert finished and proc.returncode == 0, out + logs(tmp_path, 'example')
+    spin_until(node, lambda: False, 0.2)
+    assert len(list((tmp_path / 'example').glob('square_stop-*.log'))) == 2
+    assert not list((tmp_path / 'example').glob('gait-*.log'))
+    corners = {round(math.degrees(abs(a))) for t in targets for a in t}
+    assert len(targets) >= 10 and corners == {60}, corners     # the example's amplitude, every command

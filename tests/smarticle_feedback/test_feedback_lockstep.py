@@ -1,19 +1,19 @@
 """The lock-step ROS path with feedback is deterministic and equals the batch path, bit for bit.
 
 sim_bridge (lock-step, an FSR sample every control tick), one gait node (lockstep, wait_for_feedback) and
-one feedback node (lockstep) per robot, each a separate process over DDS, on a C2 start of the P6
-experiment: a halt is part of the tick of its FSR sample, so two runs give the same poses at every
+one feedback node (lockstep) per robot, each a separate process over DDS (the sim_world fixture), on a C2
+start of the P6 experiment: a halt is part of the tick of its FSR sample, so two runs give the same poses at every
 stamp, and those are the poses of the batch path (Runner + FeedbackController + GaitController).
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
-from smarticle_common import topics
 from smarticle_common.gait import GaitConfig
 from smarticle_experiments.p6 import COLLIDING_START, c2_scene, default_feedback_config
 from smarticle_feedback.controller import ImpactController
@@ -21,8 +21,7 @@ from smarticle_sim.bridge import BridgeSettings
 from smarticle_sim.physics import Physics
 from smarticle_sim.runner import FeedbackController, GaitController, Runner
 from smarticle_sim.settings import SimConfig
-
-from tests.helpers.ros import spin_until
+from smarticle_sim.testing import FEEDBACK, SimWorld
 
 pytestmark = pytest.mark.integration
 
@@ -73,46 +72,20 @@ def _batch(config: SimConfig, params: dict[str, Any], ticks: int,
     return poses, [(round(t * 1e9), k, face) for t, k, face in controller.halts]
 
 
-def _ros(nodes: Any, probe: Any, params: dict[str, Any], config: SimConfig, duration: float,
-         listeners: int, clock_offsets: tuple[float, float] = (0.0, 0.0)) -> tuple[dict[int, np.ndarray], list[tuple]]:
-    """Poses by stamp (ns) and halts (stamp ns, robot, face) of the lock-step ROS path."""
-    from geometry_msgs.msg import PoseArray
-    from rclpy.qos import QoSProfile, ReliabilityPolicy
-    from std_msgs.msg import Header
-
-    poses: dict[int, np.ndarray] = {}
-    halts: list[tuple] = []
-    subs = [probe.create_subscription(
-        PoseArray, topics.topic('poses'),
-        lambda m: poses.__setitem__(m.header.stamp.sec * 10**9 + m.header.stamp.nanosec,
-                                    np.array([[p.position.x, p.position.y] for p in m.poses])),
-        QoSProfile(depth=5000, reliability=ReliabilityPolicy.BEST_EFFORT))]
-    for k in range(2):
-        subs.append(probe.create_subscription(
-            Header, topics.topic('halt', k),
-            lambda m, k=k: halts.append((m.stamp.sec * 10**9 + m.stamp.nanosec, k, m.frame_id)),
-            topics.qos_profile(topics.Qos.COMMAND)))
+def _ros(world: SimWorld, params: dict[str, Any], config: SimConfig, duration: float,
+         clock_offsets: tuple[float, float] = (0.0, 0.0)) -> tuple[dict[int, np.ndarray], list[tuple]]:
+    """Poses by stamp (ns) and halts (stamp ns, robot, face) of the lock-step ROS path (sim_world fixture)."""
     phases = COLLIDING_START[3]
-    for k in range(2):
-        nodes.start('gait', '--ros-args', '-r', f'__node:=gait_{k}', '-p', f'robot_id:={k}',
-                    '-p', 'lockstep:=true', '-p', 'wait_for_feedback:=true', '-p', 'alpha_max_deg:=90.0',
-                    '-p', f'servo_speed:={config.robot.servo_speed}', '-p', f'phase:={phases[k]}',
-                    '-p', f'start_at:={START_AT}', '-p', f'clock_rate_offset:={clock_offsets[k]!r}')
-        nodes.start('feedback', '--ros-args', '-r', f'__node:=feedback_{k}', '-p', f'robot_id:={k}',
-                    '-p', 'lockstep:=true', '-p', f'phase:={phases[k]}', '-p', f'start_at:={START_AT}',
-                    '-p', f'clock_rate_offset:={clock_offsets[k]!r}')
-    # the halts are seen only once both feedback nodes' publishers have matched the probe
-    assert spin_until(probe, lambda: all(sub.get_publisher_count() > 0 for sub in subs[1:]), 30.0)
-    args = [a for name, value in {**params, 'duration': duration, 'wait_for_subscribers': listeners}.items()
-            for a in ('-p', f'{name}:={value}')]
-    bridge = nodes.start('sim_bridge', '--ros-args', *args)
-    spin_until(probe, lambda: bridge.poll() is not None, 120.0)
-    spin_until(probe, lambda: False, 0.3)
-    assert bridge.returncode == 0, nodes.output(bridge)
-    nodes.stop_all()
-    for sub in subs:
-        probe.destroy_subscription(sub)
-    return poses, sorted(halts)
+    bridge = {k: v for k, v in params.items() if k not in ('scene', 'preset')}
+    world.start(scene='pair', preset='feedback', params=bridge,
+                controller_params=[{'alpha_max_deg': 90.0, 'servo_speed': config.robot.servo_speed,
+                                    'phase': phases[k], 'start_at': START_AT, 'clock_rate_offset': clock_offsets[k]}
+                                   for k in range(2)],
+                feedback=FEEDBACK,
+                feedback_params=[{'phase': phases[k], 'start_at': START_AT, 'clock_rate_offset': clock_offsets[k]}
+                                 for k in range(2)])
+    world.step_to(duration)
+    return {stamp: p[:, :2] for stamp, p in world.data.poses.items()}, world.halts
 
 
 #: Clock-rate offsets of the two robots' boards for the noisy case: about 1.5 and 1 sd of the cited
@@ -122,7 +95,7 @@ CLOCK_OFFSETS = (0.0043, -0.0029)
 
 @pytest.mark.parametrize('clock_offsets, repeats', [((0.0, 0.0), 2), (CLOCK_OFFSETS, 1)],
                          ids=['same-clocks', 'clock-noise'])
-def test_lockstep_feedback_is_deterministic_and_equals_the_batch_path(nodes: Any, ros_node: Any,
+def test_lockstep_feedback_is_deterministic_and_equals_the_batch_path(tmp_path: Path,
                                                                       clock_offsets: tuple[float, float],
                                                                       repeats: int) -> None:
     """Two runs agree bit for bit with the batch path; with clock-rate noise the gait and feedback nodes
@@ -136,8 +109,10 @@ def test_lockstep_feedback_is_deterministic_and_equals_the_batch_path(nodes: Any
         same_clocks = _batch(config, params, ticks)[0]
         stamp = max(batch)
         assert not np.array_equal(batch[stamp], same_clocks[stamp]), 'the clock offsets must change the run'
-    probe = ros_node('feedback_lockstep_probe')
-    runs = [_ros(nodes, probe, params, config, duration, 1, clock_offsets) for _ in range(repeats)]
+    runs = []
+    for i in range(repeats):
+        with SimWorld(tmp_path / f'run{i}') as world:
+            runs.append(_ros(world, params, config, duration, clock_offsets))
     for poses, halts in runs:
         assert halts == batch_halts
         common = sorted(set(poses) & set(batch))

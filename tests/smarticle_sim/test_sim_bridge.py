@@ -12,20 +12,9 @@ from smarticle_common import topics
 from smarticle_common.gait import TIME_EPS, GaitConfig, SquareGait, open_loop_angles
 from smarticle_sim.bridge import BridgeSettings, SimBridgeCore
 from smarticle_sim.errors import ConfigError
-
-from tests.helpers.ros import spin_until
+from smarticle_sim.testing import SimWorld
 
 ROOT = Path(__file__).resolve().parents[2]
-
-
-def _keep_all_sensor() -> object:
-    """Best-effort QoS (compatible with the sensor topics) with a reader history deep enough to lose nothing."""
-    from rclpy.qos import QoSProfile, ReliabilityPolicy
-
-    return QoSProfile(depth=5000, reliability=ReliabilityPolicy.BEST_EFFORT)
-
-
-KEEP_ALL_SENSOR = _keep_all_sensor()
 
 
 @pytest.mark.parametrize('changes, field', [
@@ -119,39 +108,18 @@ def test_core_is_deterministic_for_the_same_seed() -> None:
 
 
 @pytest.mark.integration
-def test_gait_nodes_drive_the_sim_in_lockstep_deterministically(nodes, ros_node) -> None:  # type: ignore[no-untyped-def]
-    from geometry_msgs.msg import PoseArray
-    from sensor_msgs.msg import JointState
-
+def test_gait_nodes_drive_the_sim_in_lockstep_deterministically(tmp_path: Path) -> None:
     duration = 4.0
     runs: list[dict[int, np.ndarray]] = []
-    states: dict[int, tuple[float, float]] = {}
+    states: dict[int, np.ndarray] = {}
     for run in range(2):
-        node = ros_node(f'bridge_probe_{run}')
-        poses: dict[int, np.ndarray] = {}
-        node.create_subscription(
-            PoseArray, topics.topic('poses'),
-            lambda m, poses=poses: poses.__setitem__(
-                m.header.stamp.sec * 10**9 + m.header.stamp.nanosec,
-                np.array([[p.position.x, p.position.y, p.orientation.z, p.orientation.w] for p in m.poses])),
-            KEEP_ALL_SENSOR)
-        if run == 0:
-            node.create_subscription(
-                JointState, topics.topic('joint_states', 0),
-                lambda m: states.__setitem__(m.header.stamp.sec * 10**9 + m.header.stamp.nanosec,
-                                             tuple(m.position)),
-                KEEP_ALL_SENSOR)
-        for k in range(2):
-            nodes.start('gait', '--ros-args', '-p', f'robot_id:={k}', '-p', 'lockstep:=true',
-                        '-p', 'use_sim_time:=true', '-p', 'start_at:=0.5')
-        bridge = nodes.start('sim_bridge', '--ros-args', '-p', 'scene:=pair', '-p', 'pair_r:=2.5',
-                             '-p', f'duration:={duration}', '-p', 'start_at:=0.5',
-                             '-p', f'wait_for_subscribers:={run + 1}')   # earlier probes still listen
-        spin_until(node, lambda bridge=bridge: bridge.poll() is not None, 90.0)
-        spin_until(node, lambda: False, 0.3)
-        assert bridge.returncode == 0, nodes.output(bridge)
-        nodes.stop_all()
-        runs.append(poses)
+        with SimWorld(tmp_path / f'run{run}') as world:
+            world.start(scene='pair', params={'pair_r': 2.5, 'start_at': 0.5},
+                        controller_params={'start_at': 0.5}, joint_states=run == 0)
+            world.step_to(duration)
+            runs.append(dict(world.data.poses))
+            if run == 0:
+                states = dict(world.joint_states(0))
     common = sorted(set(runs[0]) & set(runs[1]))
     assert len(common) >= 0.8 * duration / 0.05, 'too few pose messages arrived'
     for stamp in common:
@@ -162,30 +130,19 @@ def test_gait_nodes_drive_the_sim_in_lockstep_deterministically(nodes, ros_node)
     for stamp, angles in states.items():
         tau = (stamp * 1e-9 - 0.5) / gait.period
         if tau > 0 and 0.85 < (4 * tau) % 1.0 < 0.99:   # late in a quarter: the stroke is over
-            assert angles == pytest.approx(open_loop_angles(gait, tau), abs=math.radians(6.0))
+            assert tuple(angles) == pytest.approx(open_loop_angles(gait, tau), abs=math.radians(6.0))
             checked += 1
     assert checked >= 8
 
 
 @pytest.mark.integration
-def test_bridge_core_and_ros_path_agree(nodes, ros_node) -> None:  # type: ignore[no-untyped-def]
-    from geometry_msgs.msg import PoseArray
-
+def test_bridge_core_and_ros_path_agree(sim_world: SimWorld) -> None:
     duration = 2.0
-    node = ros_node('agree_probe')
-    poses: dict[int, np.ndarray] = {}
-    node.create_subscription(
-        PoseArray, topics.topic('poses'),
-        lambda m: poses.__setitem__(m.header.stamp.sec * 10**9 + m.header.stamp.nanosec,
-                                    np.array([[p.position.x, p.position.y] for p in m.poses])),
-        KEEP_ALL_SENSOR)
-    for k in range(2):
-        nodes.start('gait', '--ros-args', '-p', f'robot_id:={k}', '-p', 'lockstep:=true', '-p', 'use_sim_time:=true')
-    bridge = nodes.start('sim_bridge', '--ros-args', '-p', 'scene:=pair', '-p', f'duration:={duration}',
-                         '-p', 'wait_for_subscribers:=1')
-    spin_until(node, lambda: bridge.poll() is not None, 90.0)
-    spin_until(node, lambda: False, 0.3)
-    assert bridge.returncode == 0, nodes.output(bridge)
+    sim_world.start(scene='pair', gliders=True)        # the glider monitor listens too: it changes nothing
+    sim_world.step_to(duration)
+    assert sim_world.glider_reports, 'the glider monitor reported nothing'
+    assert all(stamp <= round(duration * 1e9) for stamp, _ in sim_world.glider_reports)
+    poses = {stamp: p[:, :2] for stamp, p in sim_world.data.poses.items()}
 
     core = SimBridgeCore(BridgeSettings.defaults(scene='pair'))
     gaits = [SquareGait(GaitConfig.from_degrees(90.0)) for _ in range(2)]

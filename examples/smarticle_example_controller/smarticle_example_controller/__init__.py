@@ -1,0 +1,1 @@
+"""An example of a user's own smarticle controller (docs/own_controller.md)."""

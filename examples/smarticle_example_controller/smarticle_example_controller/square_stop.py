@@ -1,0 +1,133 @@
+"""ROS node `square_stop`: an example of a user's own controller for one smarticle.
+
+A square gait in the (alpha1, alpha2) shape space with its own amplitude, that stops moving to new corners
+for good once any FSR face of its robot reads more than ``stop_force`` newtons.
+
+It follows the stack's two contracts and nothing else:
+
+* the topic contract (``smarticle_common.topics``): it publishes ``/smarticle_<k>/joint_commands``
+  (sensor_msgs/JointState: position = arm targets in rad, velocity = speed limit in rad/s) and reads
+  ``/smarticle_<k>/fsr`` (effort = force of each face in N) and ``/clock``;
+* the lock-step contract of the simulation (``lockstep:=true``, docs/own_controller.md): for every
+  ``/clock`` time t it publishes exactly one command stamped t, computed from what it knew at t (here the
+  FSR sample stamped t, which the sim bridge publishes right after the clock), and answers a repeated
+  ``/clock`` message again with the same command.
+
+Without ``lockstep`` (a robot board) it publishes at ``rate`` Hz on its node clock with the newest sample.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.time import Time
+from smarticle_common import topics
+from smarticle_common.facts import SERVO_SPEED
+
+NODE_NAME = 'square_stop'
+
+
+def square_corner(t: float, start_at: float, period: float, amplitude: float) -> tuple[float, float]:
+    """The arm targets (rad) of the square gait at time ``t`` (s): one arm moves each quarter period."""
+    corners = ((amplitude, amplitude), (-amplitude, amplitude), (-amplitude, -amplitude), (amplitude, -amplitude))
+    if t < start_at:
+        return corners[0]
+    quarter = math.floor(4.0 * (t - start_at) / period)
+    return corners[(quarter + 1) % 4]
+
+
+class SquareStopNode(Node):
+    """A square gait that stops on contact, answering the simulation's clock in lock-step."""
+
+    def __init__(self, **node_options: Any) -> None:
+        """Declare the parameters, the publisher and the subscriptions."""
+        super().__init__(NODE_NAME, **node_options)
+        self.robot_id = int(self.declare_parameter('robot_id', 0).value)
+        self.amplitude = math.radians(float(self.declare_parameter('amplitude_deg', 60.0).value))
+        self.period = float(self.declare_parameter('period', 1.6).value)
+        self.start_at = float(self.declare_parameter('start_at', 0.5).value)
+        self.stop_force = float(self.declare_parameter('stop_force', 5.0).value)
+        self.speed = float(self.declare_parameter('speed', SERVO_SPEED).value)
+        self.lockstep = bool(self.declare_parameter('lockstep', False).value)
+        if not (0.0 < self.amplitude <= math.radians(120.0) and self.period > 0.0 and self.speed > 0.0):
+            raise ValueError('square_stop: amplitude_deg must be in (0, 120], period and speed positive')
+        self.JointState = topics.message_class(topics.spec_of('joint_commands').type)
+        self.commands = self.create_publisher(self.JointState, topics.topic('joint_commands', self.robot_id),
+                                              topics.qos_profile(topics.spec_of('joint_commands').qos))
+        fsr = topics.spec_of('fsr')
+        self.create_subscription(topics.message_class(fsr.type), fsr.resolve(self.robot_id), self.on_fsr,
+                                 topics.qos_profile(fsr.qos))
+        self.stopped_at: tuple[float, float] | None = None   # the corner the gait stopped at
+        self.samples: dict[int, float] = {}                  # FSR stamp (ns) -> largest face force (N)
+        self.clock_ns: int | None = None                     # the /clock time still to answer
+        if self.lockstep:
+            clock = topics.spec_of('clock')
+            self.create_subscription(topics.message_class(clock.type), clock.resolve(), self.on_clock,
+                                     topics.qos_profile(clock.qos))
+        else:
+            self.create_timer(1.0 / float(self.declare_parameter('rate', 50.0).value), self.on_timer)
+        self.get_logger().info(f'robot {self.robot_id}: square gait of {math.degrees(self.amplitude):g} deg, '
+                               f'stops above {self.stop_force:g} N; {"lock-step" if self.lockstep else "free"}')
+
+    def on_clock(self, msg: Any) -> None:
+        """Lock-step: remember the time to answer; answer once its FSR sample is here."""
+        self.clock_ns = Time.from_msg(msg.clock).nanoseconds
+        self.answer()
+
+    def on_fsr(self, msg: Any) -> None:
+        """Keep the largest finite face force of the sample, by its stamp."""
+        forces = [f for f in msg.effort if math.isfinite(f)]
+        self.samples[Time.from_msg(msg.header.stamp).nanoseconds] = max(forces, default=0.0)
+        if self.lockstep:
+            self.answer()
+
+    def answer(self) -> None:
+        """Publish the command of the unanswered /clock time once the sample of that time has arrived."""
+        t_ns = self.clock_ns
+        if t_ns is None or t_ns not in self.samples:
+            return
+        self.publish_command(t_ns, self.samples[t_ns])
+        for old in [s for s in self.samples if s < t_ns]:
+            del self.samples[old]
+
+    def on_timer(self) -> None:
+        """Free mode (a board): command for the node clock's time with the newest sample."""
+        now = self.get_clock().now().nanoseconds
+        newest = self.samples[max(self.samples)] if self.samples else 0.0
+        self.publish_command(now, newest)
+
+    def publish_command(self, t_ns: int, force: float) -> None:
+        """Decide (stop on a force above the threshold) and publish the command stamped ``t_ns``."""
+        targets = square_corner(t_ns * 1e-9, self.start_at, self.period, self.amplitude)
+        if self.stopped_at is None and force > self.stop_force:
+            self.stopped_at = targets
+            self.get_logger().info(f'stopped at t = {t_ns * 1e-9:.3f} s: an FSR face read {force:.2f} N')
+        msg = self.JointState()
+        msg.header.stamp = Time(nanoseconds=t_ns).to_msg()
+        msg.name = list(topics.JOINT_NAMES)
+        msg.position = list(self.stopped_at or targets)
+        msg.velocity = [self.speed, self.speed]
+        self.commands.publish(msg)
+
+
+def main(args: list[str] | None = None) -> None:
+    """Entry point of `ros2 run smarticle_example_controller square_stop`."""
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = SquareStopNode()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+
+
+if __name__ == '__main__':
+    main()
