@@ -12,7 +12,6 @@ import socket
 from pathlib import Path
 from typing import Any
 
-import pytest
 import yaml
 from smarticle_common.params import node_key
 

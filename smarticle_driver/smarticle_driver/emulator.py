@@ -115,6 +115,18 @@ class MaestroEmulator:
     def __exit__(self, *exc: object) -> None:
         self.stop()
 
+    def raise_priority(self, niceness: int = -10) -> bool:
+        """Run the emulator's thread at ``niceness`` (Linux; negative needs the privilege): a real board has its own
+        processor, so a busy host must not delay the emulator's time stamps. False if the system refused."""
+        thread = self._thread
+        if thread is None or thread.native_id is None:
+            raise EmulatorError('emulator not started')
+        try:
+            os.setpriority(os.PRIO_PROCESS, thread.native_id, niceness)
+        except PermissionError:
+            return False
+        return True
+
     @property
     def plugged(self) -> bool:
         """True while the pty exists and the port path points to it."""

@@ -15,7 +15,8 @@ across the whole step, so a command arriving during a step waits for at most one
 from __future__ import annotations
 
 import threading
-from collections.abc import Sequence
+import time
+from collections.abc import Callable, Sequence
 from contextlib import AbstractContextManager
 from dataclasses import asdict, dataclass, field
 from enum import IntEnum
@@ -207,6 +208,7 @@ class _Joint:
         self.sent_pulse: float | None = None   # what the board has (us), None = unknown
         self.sent_rate: float | None = None
         self.model = SlewModel()               # pulse (us) over time, at the board's speed limit
+        self.hold = False                      # stop where the model says the arm is when the target is sent
 
 
 def load_calibration(config: BridgeConfig) -> tuple[dict[str, ServoCalibration], dict[str, FsrModel]]:
@@ -218,8 +220,10 @@ class ServoBridgeCore:
     """Joint commands in, Maestro bytes out; slew-model joint states and FSR newtons back."""
 
     def __init__(self, config: BridgeConfig, servos: dict[str, ServoCalibration], fsrs: dict[str, FsrModel],
-                 link: SerialLink, board: ServoBoard) -> None:
+                 link: SerialLink, board: ServoBoard, clock: Callable[[], float] = time.monotonic) -> None:
         self.config = config
+        #: The clock of the ``now`` arguments: a hold is taken at the time it is written to the board.
+        self.clock = clock
         self.link = link
         self.board = board
         self.fsrs = [fsrs[face] for face in topics.FSR_FACES]
@@ -266,9 +270,7 @@ class ServoBridgeCore:
     def hold(self, now: float) -> list[str]:
         """Hold the arms where they are now (the lifecycle node's deactivate); warnings if the port failed."""
         with self.lock:
-            for joint in self.joints:
-                if joint.model.known:
-                    joint.target = joint.cal.pulse_to_angle(joint.model.position(now))
+            self._hold_all()
             self.holding = True
             error = self._sync(now)
         return [error] if error else []
@@ -290,6 +292,7 @@ class ServoBridgeCore:
                     if joint.name in checked.targets:
                         joint.target = checked.targets[joint.name]
                         joint.speed = checked.speeds[joint.name]
+                        joint.hold = False
                 self.last_command_time = now
                 self.holding = False
                 port_error = self._sync(now)
@@ -303,20 +306,14 @@ class ServoBridgeCore:
         Takes the lock three times (reconnect + watchdog + sync, the FSR transaction, the readout), so
         commands from another thread get to the board between them.
         """
-        result = StepResult()
-        with self.lock:
-            if self._closed:
-                return result
-            if self.link.poll():
-                result.events.append(f'port {self.link.port} opened')
-                result.warnings.extend(self._on_open(now))
-            self._watchdog(now, result)
-            self._sync(now)    # a port lost here is reported as an event below
+        result = self.service(now)
         counts = self._read_fsrs(result)
         if counts is not None:
             result.fsr_counts = tuple(counts)
             result.fsr_newtons = tuple(m.newtons(c) for m, c in zip(self.fsrs, counts, strict=True))
         with self.lock:
+            if self._closed:
+                return result
             if self._reported_open and not self.link.is_open:
                 result.events.append(f'port {self.link.port} lost ({self.link.last_error}); '
                                      'reopening with back-off')
@@ -325,6 +322,29 @@ class ServoBridgeCore:
                 result.joint_positions = tuple(j.cal.pulse_to_angle(j.model.position(now)) for j in self.joints)
                 result.joint_velocities = tuple(j.model.velocity(now) / j.cal.us_per_rad for j in self.joints)
         return result
+
+    def service(self, now: float) -> StepResult:
+        """Reconnect if due, run the watchdog and send pending targets (the first part of ``step``).
+
+        The node also calls it on its own at ``next_deadline``, between two steps.
+        """
+        result = StepResult()
+        with self.lock:
+            if self._closed:
+                return result
+            if self.link.poll():
+                result.events.append(f'port {self.link.port} opened')
+                result.warnings.extend(self._on_open(now))
+            self._watchdog(now, result)
+            self._sync(now)    # a port lost here is reported as an event by step
+        return result
+
+    def next_deadline(self) -> float | None:
+        """When ``service`` must run next (clock s), between steps: the watchdog's timeout; None = no need."""
+        with self.lock:
+            if self.holding or self.last_command_time is None or self._closed:
+                return None
+            return self.last_command_time + self.config.watchdog_timeout
 
     def poll_board_errors(self) -> list[str]:
         """Read and clear the board's error flags; return warnings (empty when all is well)."""
@@ -416,15 +436,21 @@ class ServoBridgeCore:
         """Hold the arms where the model says they are when commands have stopped."""
         if self.holding or self.last_command_time is None:
             return
-        if now - self.last_command_time <= self.config.watchdog_timeout:
+        if now - self.last_command_time < self.config.watchdog_timeout:
             return
         self.holding = True
         self.counters.add('watchdog_trips')
-        for joint in self.joints:
-            if joint.model.known:
-                joint.target = joint.cal.pulse_to_angle(joint.model.position(now))
+        self._hold_all()
         result.events.append(f'watchdog: no joint command for {now - self.last_command_time:.2f} s '
                              f'(timeout {self.config.watchdog_timeout:g} s); holding the arms')
+
+    def _hold_all(self) -> None:
+        """Make every joint with a known position stop where it is when its target is next sent."""
+        for joint in self.joints:
+            if joint.model.known:
+                joint.hold = True
+                if joint.target is None:
+                    joint.target = joint.cal.pulse_to_angle(joint.model.target)
 
     def _on_open(self, now: float) -> list[str]:
         """After (re)opening: forget what the board was sent and seed the models from its pulses."""
@@ -446,22 +472,39 @@ class ServoBridgeCore:
         return warnings
 
     def _sync(self, now: float) -> str:
-        """Send speeds and targets that differ from what the board has; return '' or the port error."""
+        """Send speeds and targets that differ from what the board has; return '' or the port error.
+
+        The board's models are advanced at the time of sending (the clock, never before ``now``); a hold
+        takes the modelled position of that moment, so an arm moving while this thread waited (for the
+        lock, for the CPU) is stopped where it is, not where it was.
+        """
         if not self.link.is_open:
             return ''
         try:
             for joint in self.joints:
                 if joint.target is None:
                     continue
+                if joint.hold:
+                    if not joint.model.known:      # lost with the port: nothing to hold
+                        joint.hold = False
+                        continue
+                    t = max(now, self.clock())
+                    joint.target = joint.cal.pulse_to_angle(joint.model.position(t))
+                    pulse = joint.model.position(t)
+                    joint.hold = False
+                    if joint.sent_pulse is None or abs(pulse - joint.sent_pulse) > PULSE_EPSILON:
+                        joint.model.set_target(self.board.set_target(joint.channel, pulse), t)
+                        joint.sent_pulse = pulse
+                    continue
                 rate = joint.cal.rate_to_pulse_rate(joint.speed)
                 if joint.sent_rate is None or abs(rate - joint.sent_rate) > 1e-9:
                     actual_rate = self.board.set_speed(joint.channel, rate)
-                    joint.model.set_rate(actual_rate, now)
+                    joint.model.set_rate(actual_rate, max(now, self.clock()))
                     joint.sent_rate = rate
                 pulse = min(max(joint.cal.angle_to_pulse(joint.target), joint.cal.min_us), joint.cal.max_us)
                 if joint.sent_pulse is None or abs(pulse - joint.sent_pulse) > PULSE_EPSILON:
                     actual = self.board.set_target(joint.channel, pulse)
-                    joint.model.set_target(actual, now)
+                    joint.model.set_target(actual, max(now, self.clock()))
                     joint.sent_pulse = pulse
         except PortUnavailable as err:
             return str(err)

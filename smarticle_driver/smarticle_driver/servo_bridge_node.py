@@ -175,17 +175,25 @@ class ServoBridgeNode(LifecycleNode):
         self._warn(warnings)
 
     def _step_loop(self) -> None:
-        """Body of the step thread: ``on_step`` every 1/fsr_rate_hz s on a fixed grid (late ticks skipped)."""
+        """Body of the step thread: ``on_step`` every 1/fsr_rate_hz s on a fixed grid (late ticks skipped), and
+        the core's ``service`` at its own deadlines in between (the watchdog fires at its timeout, not at the
+        next step)."""
         period = 1.0 / self.config.fsr_rate_hz
         due = time.monotonic()
         try:
             while not self._stop.is_set():
-                self.on_step()
-                due += period
-                late = time.monotonic() - due
-                if late > 0.0:
-                    due += math.ceil(late / period) * period
-                self._stop.wait(due - time.monotonic())
+                if time.monotonic() >= due:
+                    self.on_step()
+                    due += period
+                    late = time.monotonic() - due
+                    if late > 0.0:
+                        due += math.ceil(late / period) * period
+                else:
+                    self.on_service()
+                core = self.core
+                deadline = core.next_deadline() if core is not None else None
+                wake = due if deadline is None else min(due, deadline)
+                self._stop.wait(max(wake - time.monotonic(), 0.0))
         except BaseException as err:     # a bug: end the node from the executor's thread, as a timer would
             self._step_error = err
             self._step_failed.trigger()
@@ -204,6 +212,16 @@ class ServoBridgeNode(LifecycleNode):
             self.get_logger().info(event)
         self._warn(result.warnings)
         self._publish(result)
+
+    def on_service(self) -> None:
+        """Run the core's watchdog and pending sends between two steps (at its deadline)."""
+        core = self.core
+        if core is None:
+            return
+        result = core.service(time.monotonic())
+        for event in result.events:
+            self.get_logger().info(event)
+        self._warn(result.warnings)
 
     def on_diagnostics(self) -> None:
         """Poll the board's error flags and publish the bridge's status (and lifecycle state) on /diagnostics."""
