@@ -24,12 +24,14 @@ from typing import Any
 import numpy as np
 from smarticle_common.facts import GAIT_PERIOD, SMALL
 from smarticle_common.runs import Recording, save_npz
+from smarticle_common.cli import add_version
 
 
 
 def build_parser() -> argparse.ArgumentParser:
     """Command-line options of the demo."""
     parser = argparse.ArgumentParser(prog='demo.sh', description=__doc__.split('\n')[0] if __doc__ else None)
+    add_version(parser, 'smarticle_bringup')
     parser.add_argument('--robots', type=int, default=7, help='number of robots (default 7, as in the paper)')
     parser.add_argument('--scene', choices=('dense', 'random', 'pair'), default='dense',
                         help="starting arrangement (default: densely packed, the paper's Fig. 1(c))")
