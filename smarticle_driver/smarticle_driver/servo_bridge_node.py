@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import re
+import sys
 import threading
 import time
 from typing import Any
@@ -246,7 +247,14 @@ class ServoBridgeNode(LifecycleNode):
         super().destroy_node()
 
     def _publish(self, result: StepResult) -> None:
+        """Publish the FSR sample first (a press is on its way to the feedback node sooner), then joint states."""
         stamp = self.get_clock().now().to_msg()
+        if result.fsr_newtons is not None:
+            msg = self._joint_state()
+            msg.header.stamp = stamp
+            msg.name = list(topics.FSR_FACES)
+            msg.effort = list(result.fsr_newtons)
+            self._send(self.fsr_pub, msg)
         if result.joint_positions is not None and result.joint_velocities is not None:
             msg = self._joint_state()
             msg.header.stamp = stamp
@@ -254,12 +262,6 @@ class ServoBridgeNode(LifecycleNode):
             msg.position = list(result.joint_positions)
             msg.velocity = list(result.joint_velocities)
             self._send(self.joint_pub, msg)
-        if result.fsr_newtons is not None:
-            msg = self._joint_state()
-            msg.header.stamp = stamp
-            msg.name = list(topics.FSR_FACES)
-            msg.effort = list(result.fsr_newtons)
-            self._send(self.fsr_pub, msg)
 
     def _send(self, publisher: Any, msg: Any) -> None:
         """Publish, except while shutting down (Ctrl-C or SIGTERM can end the context during a step)."""
@@ -284,8 +286,14 @@ class ServoBridgeNode(LifecycleNode):
             self.get_logger().warning(text + more)
 
 
+#: Seconds a Python thread may hold the GIL while another waits (Python's default is 0.005): the command
+#: thread gets it from the step thread within this, so a hold is not kept waiting for a whole step.
+GIL_SWITCH_INTERVAL = 0.0005
+
+
 def main(args: list[str] | None = None) -> None:
     """Entry point of `ros2 run smarticle_driver servo_bridge`."""
+    sys.setswitchinterval(GIL_SWITCH_INTERVAL)
     raise SystemExit(run_node(ServoBridgeNode, NODE_NAME, args, startup_errors=(ParameterError, DriverError)))
 
 if __name__ == '__main__':
