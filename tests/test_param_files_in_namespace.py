@@ -8,6 +8,8 @@ fails this: rclpy applies it only to a node in the root namespace and the node k
 
 from __future__ import annotations
 
+import os
+import signal
 import socket
 from pathlib import Path
 from typing import Any
@@ -50,8 +52,8 @@ def _changes(tmp_path: Path) -> dict[str, tuple[str, str, Any, tuple[str, ...]]]
 def test_each_node_in_a_robot_namespace_takes_its_shipped_file(nodes: Any, ros_node: Any, tmp_path: Path) -> None:
     changes = _changes(tmp_path)
     assert set(changes) == {name for _, name, *_ in TABLES}, 'a shipped node file is missing here'
-    started = []
-    for folder, yaml_name, module, node_attr, _ in TABLES:
+    probe = ros_node('param_probe')
+    for folder, yaml_name, module, node_attr, _ in TABLES:     # one node at a time: a busy machine answers
         node_name = getattr(__import__(module, fromlist=[node_attr]), node_attr)
         data = yaml.safe_load((ROOT / folder / 'config' / yaml_name).read_text(encoding='utf-8'))
         assert list(data) == [node_key(node_name)], f'{yaml_name}: the section must be {node_key(node_name)}'
@@ -62,8 +64,8 @@ def test_each_node_in_a_robot_namespace_takes_its_shipped_file(nodes: Any, ros_n
         edited = tmp_path / yaml_name
         edited.write_text(yaml.safe_dump(data), encoding='utf-8')
         proc = nodes.start(executable, '--ros-args', '-r', f'__ns:={NAMESPACE}', '--params-file', str(edited), *more)
-        started.append((proc, f'{NAMESPACE}/{node_name}', name, value))
-    probe = ros_node('param_probe')
-    for proc, target, name, value in started:
+        target = f'{NAMESPACE}/{node_name}'
         got = get_parameter(probe, target, name)
         assert got == value, f'{target}: {name} = {got!r}, the file says {value!r}\n{nodes.output(proc)}'
+        os.killpg(proc.pid, signal.SIGINT)
+        proc.wait(timeout=15)
