@@ -30,7 +30,8 @@ setup(
         'console_scripts': [
             'gait = smarticle_driver.gait_node:main',
             'servo_bridge = smarticle_driver.servo_bridge_node:main',
-            'smarticle-fake-board = smarticle_driver.emulator_cli:main'
+            'smarticle-fake-board = smarticle_driver.emulator_cli:main',
+            'smarticle-board-calibrate = smarticle_driver.calibrate_cli:entry',
         ],
     },
 )

@@ -27,6 +27,7 @@ import importlib
 import sys
 from collections.abc import Callable, Sequence
 from typing import Any
+from smarticle_common.cli import version_of
 
 #: (package, executable) -> "module:Class" of every node that may be hosted (each class takes rclpy
 #: Node options as keyword arguments).
@@ -138,6 +139,9 @@ def main(argv: list[str] | None = None) -> int:
     if not words or words[0] in ('-h', '--help'):
         print(__doc__)
         return 0 if words else 2
+    if words[0] == '--version':
+        print(f'smarticle-compose {version_of("smarticle_bringup")}')
+        return 0
     executor = 'single'
     if '--executor' in words:
         at = words.index('--executor')

@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 from smarticle_common.facts import GAIT_PERIOD, PRESETS, RobotSpec
+from smarticle_common.cli import add_version
 from smarticle_common.runs import Recording, save_npz
 
 from .demo_scenes import FEEDBACK, GLIDERS, MIN_PERIODS, TRAVEL_MIN_W, DemoScene, travelling
@@ -54,6 +55,7 @@ LIMITS = ("[demo] not reproduced: the paper's robots start in phase and form tra
 def build_parser() -> argparse.ArgumentParser:
     """Command-line options of the demo."""
     parser = argparse.ArgumentParser(prog='demo.sh', description=__doc__.split('\n')[0] if __doc__ else None)
+    add_version(parser, 'smarticle_bringup')
     parser.add_argument('--seed', type=int, default=1,
                         help='seed of both starts (the jitter of the pair coordinates; default 1)')
     parser.add_argument('--periods', type=float, default=GLIDERS.periods,

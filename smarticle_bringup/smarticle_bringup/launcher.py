@@ -30,6 +30,7 @@ from types import FrameType
 from smarticle_common.launching import ProcessGroup, executable
 
 from .launch_files import LaunchFileError, LaunchPlan, NodeAction, find_launch_file, parse_arguments, resolve
+from smarticle_common.cli import add_version, closed_pipe_safe
 
 
 def executable_path(node: NodeAction) -> str:
@@ -121,6 +122,7 @@ class Launch:
 def build_parser() -> argparse.ArgumentParser:
     """Command-line options of smarticle-launch."""
     parser = argparse.ArgumentParser(prog='smarticle-launch', description=__doc__.split('\n')[0] if __doc__ else None)
+    add_version(parser, 'smarticle_bringup')
     parser.add_argument('words', nargs='+', metavar='[PACKAGE] FILE [name:=value ...]',
                         help='a launch file (or a package and the name of a file in its launch/ folder) and '
                              'its arguments')
@@ -130,6 +132,7 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+@closed_pipe_safe
 def main(argv: list[str] | None = None) -> int:
     """Run the launcher; return the exit code."""
     args = build_parser().parse_args(argv)

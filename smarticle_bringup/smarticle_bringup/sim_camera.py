@@ -17,6 +17,7 @@ from smarticle_sim.camera import CameraConfig, OverheadCamera
 from smarticle_tracking.homography import Calibration, board_targets, calibrate, save_calibration
 from smarticle_tracking.errors import TrackingError
 from smarticle_tracking.tracker import TagDetector, TrackerConfig
+from smarticle_common.cli import add_version
 
 
 def sim_calibration(width: int = 1920, height: int = 1080, **camera: Any) -> Calibration:
@@ -34,6 +35,7 @@ def sim_calibration(width: int = 1920, height: int = 1080, **camera: Any) -> Cal
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``smarticle-sim-camera-calibrate``; return the exit code."""
     parser = argparse.ArgumentParser(prog='smarticle-sim-camera-calibrate', description=__doc__.split('\n')[0])
+    add_version(parser, 'smarticle_bringup')
     parser.add_argument('--width', type=int, default=1920, help='image width (px)')
     parser.add_argument('--height', type=int, default=1080, help='image height (px)')
     parser.add_argument('--out', default=None, help='calibration YAML to write (default: print a summary only)')

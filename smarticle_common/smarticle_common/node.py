@@ -5,11 +5,17 @@ everything created in the constructor) and started with ``run_node``::
 
     def main(args: list[str] | None = None) -> None:
         raise SystemExit(run_node(GaitNode, NODE_NAME, args))
+
+``run_node`` also answers ``--help`` (usage, the node's purpose and its parameter table: names, types,
+defaults, ranges and descriptions) and ``--version`` before ``--ros-args``, without starting the node.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+import os
+import sys
+import textwrap
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any, TypeVar
 
 import rclpy
@@ -21,6 +27,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from . import topics
+from .cli import version_of
 from .params import ParameterError, ParamSpec
 
 #: Diagnostic levels (diagnostic_msgs/DiagnosticStatus).
@@ -159,9 +166,63 @@ class DiagnosticsPublisher:
                 raise
 
 
+def _default(value: Any) -> str:
+    return repr(value) if isinstance(value, str) else str(value).lower() if isinstance(value, bool) else str(value)
+
+
+def node_help(prog: str, node_name: str, description: str, specs: Sequence[ParamSpec]) -> str:
+    """The ``--help`` text of a node executable: usage, what it does, and its parameters."""
+    lines = [f'usage: {prog} [-h] [--version] [--ros-args [-p NAME:=VALUE] [--params-file FILE] '
+             '[-r __ns:=/smarticle_<k>] ...]', '']
+    if description:
+        lines += [textwrap.fill(' '.join(description.split()), 100), '']
+    lines.append(f'Runs the ROS 2 node `{node_name}`. Parameters (set them after --ros-args with -p NAME:=VALUE '
+                 'or --params-file FILE):')
+    for spec in specs:
+        kind = type(spec.default).__name__
+        limits = ('' if spec.minimum is None and spec.maximum is None
+                  else f', {spec.minimum if spec.minimum is not None else ""}..'
+                       f'{spec.maximum if spec.maximum is not None else ""}')
+        runtime = ', settable at run time' if spec.runtime else ''
+        lines.append(f'  {spec.name} ({kind}, default {_default(spec.default)}{limits}{runtime})')
+        lines += textwrap.wrap(spec.description, 100, initial_indent=' ' * 6, subsequent_indent=' ' * 6)
+    lines += ['', 'options:', '  -h, --help  show this help and exit without starting the node',
+              '  --version   print the version and exit']
+    return '\n'.join(lines) + '\n'
+
+
+def _answer_help_or_version(factory: Callable[[], Node], node_name: str, args: Sequence[str] | None,
+                            params: Sequence[ParamSpec] | None) -> bool:
+    """Print ``--help`` or ``--version`` if asked before ``--ros-args``; True if it did (do not start)."""
+    argv = list(sys.argv if args is None else args)
+    words = argv[1:]
+    if '--ros-args' in words:
+        words = words[:words.index('--ros-args')]
+    if not {'-h', '--help', '--version'} & set(words):
+        return False
+    module = sys.modules.get(getattr(factory, '__module__', '') or '')
+    distribution = (module.__name__ if module else node_name).split('.')[0]
+    prog = os.path.basename(argv[0]) if argv else node_name
+    if '--version' in words and not {'-h', '--help'} & set(words):
+        print(f'{prog} {version_of(distribution)}')
+        return True
+    if params is None:     # the module's one parameter table (PARAMS, TRACKER_PARAMS, ...)
+        tables = [v for k, v in vars(module or {}).items() if k.endswith('PARAMS') and isinstance(v, tuple)
+                  and v and all(isinstance(x, ParamSpec) for x in v)] if module else []
+        params = tables[0] if len(tables) == 1 else ()
+    description = ((module.__doc__ or '') if module else '').strip().split('\n\n')[0]
+    print(node_help(prog, node_name, description, params), end='')
+    return True
+
+
 def run_node(factory: Callable[[], Node], node_name: str, args: list[str] | None = None,
-             startup_errors: tuple[type[BaseException], ...] = (ParameterError,)) -> int:
+             startup_errors: tuple[type[BaseException], ...] = (ParameterError,),
+             params: Sequence[ParamSpec] | None = None) -> int:
     """Run a node the Jazzy way (init, spin until Ctrl-C or shutdown, destroy, try_shutdown); return the exit code.
+
+    ``--help`` / ``-h`` and ``--version`` before ``--ros-args`` print the node's help (its parameter
+    table: ``params``, else the one ``*PARAMS`` table of the factory's module) or version and return 0
+    without starting anything.
 
     A node with a ``run(executor) -> int`` method drives its own loop (the sim bridge's lock-step) and
     its return value is the exit code; any other node is spun. An error of ``startup_errors`` raised
@@ -170,6 +231,8 @@ def run_node(factory: Callable[[], Node], node_name: str, args: list[str] | None
     context down under the executor (Jazzy's races, e.g. "failed to initialize wait set") is a clean
     exit, like KeyboardInterrupt.
     """
+    if _answer_help_or_version(factory, node_name, args, params):
+        return 0
     rclpy.init(args=args)
     node = None
     code = 0

@@ -49,17 +49,27 @@ class ParamSpec:
         return value
 
 
+def node_key(node_name: str) -> str:
+    """The section key of a shipped parameter file: ``/**/<node>``, the node in any namespace.
+
+    A bare ``<node>:`` key matches only a node in the root namespace, so a robot's node started in
+    ``/smarticle_<k>`` would silently skip it.
+    """
+    return f'/**/{node_name}'
+
+
 def defaults_yaml(node_name: str, specs: tuple[ParamSpec, ...]) -> str:
-    """Render the ROS parameters file of the defaults of ``specs`` for node ``node_name``."""
+    """Render the ROS parameters file of the defaults of ``specs`` for node ``node_name`` (any namespace)."""
     params = {spec.name: spec.default for spec in specs}
-    return yaml.safe_dump({node_name: {'ros__parameters': params}}, sort_keys=False)
+    return yaml.safe_dump({node_key(node_name): {'ros__parameters': params}}, sort_keys=False)
 
 
 def read_defaults_yaml(path: str, node_name: str) -> dict[str, Any]:
-    """Read the ``ros__parameters`` of ``node_name`` (or ``/**``) from a ROS parameters file."""
+    """Read the ``ros__parameters`` of ``node_name`` (``/**/<node>``, ``<node>`` or ``/**``) from a ROS
+    parameters file."""
     with open(path, encoding='utf-8') as handle:
         data = yaml.safe_load(handle)
-    for key in (node_name, '/**'):
+    for key in (node_key(node_name), node_name, '/**'):
         if isinstance(data, dict) and key in data:
             return dict(data[key]['ros__parameters'])
     raise ParameterError(f'{path}: no section {node_name!r} with ros__parameters')

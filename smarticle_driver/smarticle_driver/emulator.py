@@ -16,6 +16,7 @@ import select
 import threading
 import time
 import tty
+from collections import deque
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,6 +28,19 @@ from smarticle_driver.slew import SlewModel
 
 class EmulatorError(DriverError):
     """Misuse of the board emulator (unknown channel, voltage out of range, not started)."""
+
+
+#: Analog replies kept by the emulator (about 4 minutes of four FSR inputs at 100 Hz).
+MAX_ANALOG_RECORDS = 100_000
+
+
+@dataclass(frozen=True)
+class AnalogRecord:
+    """One analog input reading the emulator sent: reply time (clock s), channel, counts (0..1023)."""
+
+    time: float
+    channel: int
+    counts: int
 
 
 @dataclass(frozen=True)
@@ -67,6 +81,7 @@ class MaestroEmulator:
         self._channels = [_Channel() for _ in range(channels)]
         self._lock = threading.Lock()
         self._records: list[TargetRecord] = []
+        self._analog: deque[AnalogRecord] = deque(maxlen=MAX_ANALOG_RECORDS)
         self._parser = maestro.CommandParser()
         self._error_bits = 0
         self._garbage = bytearray()
@@ -114,6 +129,18 @@ class MaestroEmulator:
 
     def __exit__(self, *exc: object) -> None:
         self.stop()
+
+    def raise_priority(self, niceness: int = -10) -> bool:
+        """Run the emulator's thread at ``niceness`` (Linux; negative needs the privilege): a real board has its own
+        processor, so a busy host must not delay the emulator's time stamps. False if the system refused."""
+        thread = self._thread
+        if thread is None or thread.native_id is None:
+            raise EmulatorError('emulator not started')
+        try:
+            os.setpriority(os.PRIO_PROCESS, thread.native_id, niceness)
+        except PermissionError:
+            return False
+        return True
 
     @property
     def plugged(self) -> bool:
@@ -197,6 +224,11 @@ class MaestroEmulator:
         """Return every Set Target received so far, in order."""
         with self._lock:
             return list(self._records)
+
+    def analog_replies(self) -> list[AnalogRecord]:
+        """Return the analog input readings sent so far (the latest MAX_ANALOG_RECORDS), in order."""
+        with self._lock:
+            return list(self._analog)
 
     def clear_targets(self) -> None:
         """Forget the recorded Set Target commands."""
@@ -303,6 +335,7 @@ class MaestroEmulator:
                 if cmd.channel in self.input_channels:
                     value = round(self._channels[cmd.channel].volts / maestro.ANALOG_VOLTS
                                   * maestro.ANALOG_FULL_SCALE)
+                    self._analog.append(AnalogRecord(now, cmd.channel, value))
                 else:
                     value = round(self._pulse(cmd.channel, now) * 4.0)
                 out += self._reply(value)

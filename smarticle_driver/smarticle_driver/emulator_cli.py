@@ -30,6 +30,7 @@ from smarticle_driver.board_calibration import (FsrModel, ServoCalibration, defa
                                           load_fsr_calibration, load_servo_calibration)
 from smarticle_driver.emulator import EmulatorError, MaestroEmulator, TargetRecord
 from smarticle_driver.errors import DriverError
+from smarticle_common.cli import add_version
 
 DEFAULT_PORT = '/tmp/smarticle_fake_maestro'
 
@@ -156,6 +157,7 @@ def build_parser() -> argparse.ArgumentParser:
     summary = (__doc__ or '').split('\n\n')[0]
     parser = argparse.ArgumentParser(prog='smarticle-fake-board', description=summary,
                                      epilog='commands (stdin or --control file): ' + ' | '.join(verbs))
+    add_version(parser, 'smarticle_driver')
     parser.add_argument('--port', default=DEFAULT_PORT,
                         help=f'stable port path (a symlink) (default {DEFAULT_PORT})')
     parser.add_argument('--servo-channels', type=int, nargs=2, default=(0, 1), metavar=('ARM1', 'ARM2'))

@@ -20,6 +20,7 @@ For a channel configured as an analog input, Get Position returns 0..1023 for 0.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from enum import IntEnum
@@ -134,10 +135,15 @@ def us_to_quarter(pulse_us: float) -> int:
 
 
 def speed_to_units(us_per_s: float) -> int:
-    """Convert a pulse rate (us/s; inf or <= 0 = unlimited) to Set Speed units, at least 1 when limited."""
+    """Convert a pulse rate (us/s; inf or <= 0 = unlimited) to Set Speed units, at least 1 when limited.
+
+    Rounds up: the board never moves slower than asked, so a stroke timed to fit a gait quarter at the
+    servo speed still ends inside it (at 600 us/rad and pi/0.4 rad/s: 189 units, a 180 degree stroke in
+    0.3989 s, not 188 units and 0.4011 s).
+    """
     if not us_per_s < float('inf') or us_per_s <= 0.0:
         return 0
-    return min(max(int(round(us_per_s / SPEED_UNIT_US_PER_S)), 1), MAX_14BIT)
+    return min(max(math.ceil(us_per_s / SPEED_UNIT_US_PER_S - 1e-9), 1), MAX_14BIT)
 
 
 def units_to_speed(units: int) -> float:

@@ -15,7 +15,8 @@ across the whole step, so a command arriving during a step waits for at most one
 from __future__ import annotations
 
 import threading
-from collections.abc import Sequence
+import time
+from collections.abc import Callable, Sequence
 from contextlib import AbstractContextManager
 from dataclasses import asdict, dataclass, field
 from enum import IntEnum
@@ -38,6 +39,15 @@ SERVO_CALIBRATION_FILE = 'servo_calibration.yaml'
 FSR_CALIBRATION_FILE = 'fsr_calibration.yaml'
 #: Pulses closer than this (us) count as the same target (a quarter-microsecond step is 0.25 us).
 PULSE_EPSILON = 0.125
+#: With one_arm_at_a_time: seconds between the modelled end of one arm's stroke and the start of the other's.
+STROKE_GAP = 0.005
+#: With one_arm_at_a_time: a held-back target is sent at the latest this many seconds after it arrived, so a
+#: gait whose strokes fill their quarters cannot fall further and further behind its own clock.
+MAX_STROKE_DELAY = 0.05
+#: The board moves this fraction faster than commanded: a stroke timed to fill its gait quarter at the servo
+#: speed ends early on the board (8 ms for the default gait's 180 degrees in 0.4 s); the simulation keeps
+#: the exact speed. The slew model (joint_states) uses the board's speed.
+BOARD_SPEED_MARGIN = 0.02
 
 _CH = (0, 23)
 
@@ -71,6 +81,10 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec('reconnect_max', 2.0, 'longest wait (s) between reopen attempts', 0.01, 600.0),
     ParamSpec('diagnostics_period', 1.0, 'seconds between /diagnostics messages and board error polls',
               0.1, 60.0),
+    ParamSpec('one_arm_at_a_time', True, 'a new target for one arm waits until the other arm has reached its '
+              f'target (by the slew model) plus {STROKE_GAP * 1e3:g} ms, at most {MAX_STROKE_DELAY * 1e3:g} ms, '
+              "so the square gait's arms never move together on the board; holds are never delayed; false = "
+              'send every target at once'),
     ParamSpec('autostart', True, 'bring the lifecycle node to active by itself: configure (open the port, '
               'retried every reconnect_max seconds until it opens) then activate; false = wait for '
               'lifecycle transitions (ros2 lifecycle set)'),
@@ -97,6 +111,7 @@ class BridgeConfig:
     reconnect_initial: float = 0.1
     reconnect_max: float = 2.0
     diagnostics_period: float = 1.0
+    one_arm_at_a_time: bool = True
     autostart: bool = True
 
     def __post_init__(self) -> None:
@@ -127,7 +142,8 @@ class BridgeConfig:
                    servo_calibration_file=values['servo_calibration_file'],
                    fsr_calibration_file=values['fsr_calibration_file'], reply_timeout=values['reply_timeout'],
                    reconnect_initial=values['reconnect_initial'], reconnect_max=values['reconnect_max'],
-                   diagnostics_period=values['diagnostics_period'], autostart=values['autostart'])
+                   diagnostics_period=values['diagnostics_period'],
+                   one_arm_at_a_time=values['one_arm_at_a_time'], autostart=values['autostart'])
 
     def servo_calibration_path(self) -> Path:
         """Return the servo calibration file to load (the package default when none is set)."""
@@ -207,6 +223,8 @@ class _Joint:
         self.sent_pulse: float | None = None   # what the board has (us), None = unknown
         self.sent_rate: float | None = None
         self.model = SlewModel()               # pulse (us) over time, at the board's speed limit
+        self.hold = False                      # stop where the model says the arm is when the target is sent
+        self.target_time = 0.0                 # when the wanted target arrived (clock s)
 
 
 def load_calibration(config: BridgeConfig) -> tuple[dict[str, ServoCalibration], dict[str, FsrModel]]:
@@ -218,8 +236,10 @@ class ServoBridgeCore:
     """Joint commands in, Maestro bytes out; slew-model joint states and FSR newtons back."""
 
     def __init__(self, config: BridgeConfig, servos: dict[str, ServoCalibration], fsrs: dict[str, FsrModel],
-                 link: SerialLink, board: ServoBoard) -> None:
+                 link: SerialLink, board: ServoBoard, clock: Callable[[], float] = time.monotonic) -> None:
         self.config = config
+        #: The clock of the ``now`` arguments: a hold is taken at the time it is written to the board.
+        self.clock = clock
         self.link = link
         self.board = board
         self.fsrs = [fsrs[face] for face in topics.FSR_FACES]
@@ -235,6 +255,8 @@ class ServoBridgeCore:
         #: Serialises the board and all the state above; held for one board transaction at a time.
         self.lock: AbstractContextManager[Any] = threading.Lock()
         self._closed = False
+        #: When a target held back by one_arm_at_a_time is due (clock s), None = nothing held back.
+        self._stroke_due: float | None = None
         #: The port state the last step reported: a loss found by any thread (a command, the error poll)
         #: is reported once, by the next step.
         self._reported_open = False
@@ -266,9 +288,7 @@ class ServoBridgeCore:
     def hold(self, now: float) -> list[str]:
         """Hold the arms where they are now (the lifecycle node's deactivate); warnings if the port failed."""
         with self.lock:
-            for joint in self.joints:
-                if joint.model.known:
-                    joint.target = joint.cal.pulse_to_angle(joint.model.position(now))
+            self._hold_all()
             self.holding = True
             error = self._sync(now)
         return [error] if error else []
@@ -286,10 +306,14 @@ class ServoBridgeCore:
             for counter, count in checked.counts.items():
                 self.counters.add(counter, count)
             if checked.targets:
+                previous = {joint.name: joint.target for joint in self.joints}
                 for joint in self.joints:
                     if joint.name in checked.targets:
                         joint.target = checked.targets[joint.name]
                         joint.speed = checked.speeds[joint.name]
+                        joint.hold = False
+                        if joint.target != previous.get(joint.name):
+                            joint.target_time = now
                 self.last_command_time = now
                 self.holding = False
                 port_error = self._sync(now)
@@ -303,20 +327,14 @@ class ServoBridgeCore:
         Takes the lock three times (reconnect + watchdog + sync, the FSR transaction, the readout), so
         commands from another thread get to the board between them.
         """
-        result = StepResult()
-        with self.lock:
-            if self._closed:
-                return result
-            if self.link.poll():
-                result.events.append(f'port {self.link.port} opened')
-                result.warnings.extend(self._on_open(now))
-            self._watchdog(now, result)
-            self._sync(now)    # a port lost here is reported as an event below
+        result = self.service(now)
         counts = self._read_fsrs(result)
         if counts is not None:
             result.fsr_counts = tuple(counts)
             result.fsr_newtons = tuple(m.newtons(c) for m, c in zip(self.fsrs, counts, strict=True))
         with self.lock:
+            if self._closed:
+                return result
             if self._reported_open and not self.link.is_open:
                 result.events.append(f'port {self.link.port} lost ({self.link.last_error}); '
                                      'reopening with back-off')
@@ -325,6 +343,32 @@ class ServoBridgeCore:
                 result.joint_positions = tuple(j.cal.pulse_to_angle(j.model.position(now)) for j in self.joints)
                 result.joint_velocities = tuple(j.model.velocity(now) / j.cal.us_per_rad for j in self.joints)
         return result
+
+    def service(self, now: float) -> StepResult:
+        """Reconnect if due, run the watchdog and send pending targets (the first part of ``step``).
+
+        The node also calls it on its own at ``next_deadline``, between two steps.
+        """
+        result = StepResult()
+        with self.lock:
+            if self._closed:
+                return result
+            if self.link.poll():
+                result.events.append(f'port {self.link.port} opened')
+                result.warnings.extend(self._on_open(now))
+            self._watchdog(now, result)
+            self._sync(now)    # a port lost here is reported as an event by step
+        return result
+
+    def next_deadline(self) -> float | None:
+        """When ``service`` must run next (clock s), between steps: the watchdog's timeout or a stroke held back
+        by one_arm_at_a_time; None = no need."""
+        with self.lock:
+            if self._closed:
+                return None
+            due = [t for t in (self._stroke_due, None if self.holding or self.last_command_time is None
+                               else self.last_command_time + self.config.watchdog_timeout) if t is not None]
+            return min(due) if due else None
 
     def poll_board_errors(self) -> list[str]:
         """Read and clear the board's error flags; return warnings (empty when all is well)."""
@@ -416,15 +460,21 @@ class ServoBridgeCore:
         """Hold the arms where the model says they are when commands have stopped."""
         if self.holding or self.last_command_time is None:
             return
-        if now - self.last_command_time <= self.config.watchdog_timeout:
+        if now - self.last_command_time < self.config.watchdog_timeout:
             return
         self.holding = True
         self.counters.add('watchdog_trips')
-        for joint in self.joints:
-            if joint.model.known:
-                joint.target = joint.cal.pulse_to_angle(joint.model.position(now))
+        self._hold_all()
         result.events.append(f'watchdog: no joint command for {now - self.last_command_time:.2f} s '
                              f'(timeout {self.config.watchdog_timeout:g} s); holding the arms')
+
+    def _hold_all(self) -> None:
+        """Make every joint with a known position stop where it is when its target is next sent."""
+        for joint in self.joints:
+            if joint.model.known:
+                joint.hold = True
+                if joint.target is None:
+                    joint.target = joint.cal.pulse_to_angle(joint.model.target)
 
     def _on_open(self, now: float) -> list[str]:
         """After (re)opening: forget what the board was sent and seed the models from its pulses."""
@@ -446,26 +496,60 @@ class ServoBridgeCore:
         return warnings
 
     def _sync(self, now: float) -> str:
-        """Send speeds and targets that differ from what the board has; return '' or the port error."""
+        """Send speeds and targets that differ from what the board has; return '' or the port error.
+
+        The board's models are advanced at the time of sending (the clock, never before ``now``); a hold
+        takes the modelled position of that moment, so an arm moving while this thread waited (for the
+        lock, for the CPU) is stopped where it is, not where it was.
+        """
         if not self.link.is_open:
             return ''
+        self._stroke_due = None
         try:
             for joint in self.joints:
                 if joint.target is None:
                     continue
-                rate = joint.cal.rate_to_pulse_rate(joint.speed)
+                if joint.hold:
+                    if not joint.model.known:      # lost with the port: nothing to hold
+                        joint.hold = False
+                        continue
+                    t = max(now, self.clock())
+                    joint.target = joint.cal.pulse_to_angle(joint.model.position(t))
+                    pulse = joint.model.position(t)
+                    joint.hold = False
+                    if joint.sent_pulse is None or abs(pulse - joint.sent_pulse) > PULSE_EPSILON:
+                        joint.model.set_target(self.board.set_target(joint.channel, pulse), t)
+                        joint.sent_pulse = pulse
+                    continue
+                rate = joint.cal.rate_to_pulse_rate(joint.speed) * (1.0 + BOARD_SPEED_MARGIN)
                 if joint.sent_rate is None or abs(rate - joint.sent_rate) > 1e-9:
                     actual_rate = self.board.set_speed(joint.channel, rate)
-                    joint.model.set_rate(actual_rate, now)
+                    joint.model.set_rate(actual_rate, max(now, self.clock()))
                     joint.sent_rate = rate
                 pulse = min(max(joint.cal.angle_to_pulse(joint.target), joint.cal.min_us), joint.cal.max_us)
                 if joint.sent_pulse is None or abs(pulse - joint.sent_pulse) > PULSE_EPSILON:
+                    due = self._other_arm_done(joint, max(now, self.clock()))
+                    if due is not None:
+                        self._stroke_due = due if self._stroke_due is None else min(due, self._stroke_due)
+                        continue
                     actual = self.board.set_target(joint.channel, pulse)
-                    joint.model.set_target(actual, now)
+                    joint.model.set_target(actual, max(now, self.clock()))
                     joint.sent_pulse = pulse
         except PortUnavailable as err:
             return str(err)
         return ''
+
+    def _other_arm_done(self, joint: _Joint, t: float) -> float | None:
+        """With one_arm_at_a_time: when ``joint`` may start a stroke if another arm is still moving at ``t``
+        (its modelled end + STROKE_GAP); None = now."""
+        if not self.config.one_arm_at_a_time:
+            return None
+        due = max((other.model.end_time() + STROKE_GAP for other in self.joints
+                   if other is not joint and other.model.known), default=None)
+        if due is None:
+            return None
+        due = min(due, joint.target_time + MAX_STROKE_DELAY)
+        return due if due > t else None
 
     def _count_reply_error(self, err: ReplyError) -> str:
         self.counters.add(err.kind)

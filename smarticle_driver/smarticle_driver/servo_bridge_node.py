@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import re
+import sys
 import threading
 import time
 from typing import Any
@@ -175,17 +176,25 @@ class ServoBridgeNode(LifecycleNode):
         self._warn(warnings)
 
     def _step_loop(self) -> None:
-        """Body of the step thread: ``on_step`` every 1/fsr_rate_hz s on a fixed grid (late ticks skipped)."""
+        """Body of the step thread: ``on_step`` every 1/fsr_rate_hz s on a fixed grid (late ticks skipped), and
+        the core's ``service`` at its own deadlines in between (the watchdog fires at its timeout, not at the
+        next step)."""
         period = 1.0 / self.config.fsr_rate_hz
         due = time.monotonic()
         try:
             while not self._stop.is_set():
-                self.on_step()
-                due += period
-                late = time.monotonic() - due
-                if late > 0.0:
-                    due += math.ceil(late / period) * period
-                self._stop.wait(due - time.monotonic())
+                if time.monotonic() >= due:
+                    self.on_step()
+                    due += period
+                    late = time.monotonic() - due
+                    if late > 0.0:
+                        due += math.ceil(late / period) * period
+                else:
+                    self.on_service()
+                core = self.core
+                deadline = core.next_deadline() if core is not None else None
+                wake = due if deadline is None else min(due, deadline)
+                self._stop.wait(max(wake - time.monotonic(), 0.0))
         except BaseException as err:     # a bug: end the node from the executor's thread, as a timer would
             self._step_error = err
             self._step_failed.trigger()
@@ -204,6 +213,16 @@ class ServoBridgeNode(LifecycleNode):
             self.get_logger().info(event)
         self._warn(result.warnings)
         self._publish(result)
+
+    def on_service(self) -> None:
+        """Run the core's watchdog and pending sends between two steps (at its deadline)."""
+        core = self.core
+        if core is None:
+            return
+        result = core.service(time.monotonic())
+        for event in result.events:
+            self.get_logger().info(event)
+        self._warn(result.warnings)
 
     def on_diagnostics(self) -> None:
         """Poll the board's error flags and publish the bridge's status (and lifecycle state) on /diagnostics."""
@@ -228,7 +247,14 @@ class ServoBridgeNode(LifecycleNode):
         super().destroy_node()
 
     def _publish(self, result: StepResult) -> None:
+        """Publish the FSR sample first (a press is on its way to the feedback node sooner), then joint states."""
         stamp = self.get_clock().now().to_msg()
+        if result.fsr_newtons is not None:
+            msg = self._joint_state()
+            msg.header.stamp = stamp
+            msg.name = list(topics.FSR_FACES)
+            msg.effort = list(result.fsr_newtons)
+            self._send(self.fsr_pub, msg)
         if result.joint_positions is not None and result.joint_velocities is not None:
             msg = self._joint_state()
             msg.header.stamp = stamp
@@ -236,12 +262,6 @@ class ServoBridgeNode(LifecycleNode):
             msg.position = list(result.joint_positions)
             msg.velocity = list(result.joint_velocities)
             self._send(self.joint_pub, msg)
-        if result.fsr_newtons is not None:
-            msg = self._joint_state()
-            msg.header.stamp = stamp
-            msg.name = list(topics.FSR_FACES)
-            msg.effort = list(result.fsr_newtons)
-            self._send(self.fsr_pub, msg)
 
     def _send(self, publisher: Any, msg: Any) -> None:
         """Publish, except while shutting down (Ctrl-C or SIGTERM can end the context during a step)."""
@@ -266,8 +286,14 @@ class ServoBridgeNode(LifecycleNode):
             self.get_logger().warning(text + more)
 
 
+#: Seconds a Python thread may hold the GIL while another waits (Python's default is 0.005): the command
+#: thread gets it from the step thread within this, so a hold is not kept waiting for a whole step.
+GIL_SWITCH_INTERVAL = 0.0005
+
+
 def main(args: list[str] | None = None) -> None:
     """Entry point of `ros2 run smarticle_driver servo_bridge`."""
+    sys.setswitchinterval(GIL_SWITCH_INTERVAL)
     raise SystemExit(run_node(ServoBridgeNode, NODE_NAME, args, startup_errors=(ParameterError, DriverError)))
 
 if __name__ == '__main__':

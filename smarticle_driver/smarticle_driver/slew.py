@@ -45,6 +45,12 @@ class SlewModel:
             return 0.0
         return math.copysign(self.rate, self.target - self.start)
 
+    def end_time(self) -> float:
+        """When the servo reaches its target (``t0`` if it is at rest, unknown or unlimited)."""
+        if math.isnan(self.start) or math.isnan(self.target) or not math.isfinite(self.rate):
+            return self.t0
+        return self.t0 + abs(self.target - self.start) / self.rate
+
     def set_target(self, target: float, now: float) -> None:
         """Head for ``target`` from wherever the servo is at ``now``."""
         self.start = self.position(now)

@@ -35,6 +35,7 @@ from smarticle_common.topics import FSR_FACES
 
 from .collisions import CollisionEvent, find_events, load_record
 from .errors import CalibrationInputError
+from smarticle_common.cli import add_version, closed_pipe_safe
 
 #: Forces below this (N) are contact noise, not impacts (the sim reports tiny resting forces).
 DEFAULT_FLOOR = 0.05
@@ -319,9 +320,11 @@ def main_events(paths: Sequence[str], floor: float, check_shipped: bool = False)
     return 0
 
 
+@closed_pipe_safe
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of `smarticle-feedback-calibrate`: table on stdout, PNG next to the input (or --png)."""
     parser = argparse.ArgumentParser(prog='smarticle-feedback-calibrate', description=__doc__.split('\n')[0])
+    add_version(parser, 'smarticle_feedback')
     parser.add_argument('recording', nargs='+',
                         help='c2_steps.npz of `smarticle-experiments c2-collisions` (several are pooled; per-face '
                         'windows from the '

@@ -28,12 +28,14 @@ from .scenes import Scene, build_scene
 from smarticle_common.facts import GAIT_PERIOD, PRESETS
 
 from .settings import NoiseConfig, SimConfig
+from smarticle_common.cli import add_version, closed_pipe_safe
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``smarticle-sim``."""
     parser = argparse.ArgumentParser(prog='smarticle-sim',
                                      description=__doc__.split('\n')[0] if __doc__ else None)
+    add_version(parser, 'smarticle_sim')
     sub = parser.add_subparsers(dest='command', required=True)
     run = sub.add_parser('run', help='simulate a scene and write an npz recording plus a trajectory PNG')
     bench = sub.add_parser('bench', help='time the Runner loop against a bare PyBullet loop (prints a table)')
@@ -112,6 +114,7 @@ def scene_from_args(args: argparse.Namespace, config: SimConfig) -> Scene:
                        phase_jitter=args.phase_jitter)
 
 
+@closed_pipe_safe
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``smarticle-sim``; returns the process exit code."""
     args = build_parser().parse_args(argv)

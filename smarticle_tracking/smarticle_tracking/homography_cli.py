@@ -27,6 +27,7 @@ from smarticle_common.facts import TAG_DICTIONARY, TAG_SIZE
 from .errors import TrackingError
 from .homography import board_targets, calibrate, save_calibration
 from .tracker import TagDetector, TrackerConfig
+from smarticle_common.cli import add_version
 
 
 def read_targets(path: str) -> tuple[dict[int, tuple[float, float, float]], float, str]:
@@ -41,6 +42,7 @@ def read_targets(path: str) -> tuple[dict[int, tuple[float, float, float]], floa
 def main(argv: list[str] | None = None) -> int:
     """Run the calibration command; return the exit code."""
     parser = argparse.ArgumentParser(prog='smarticle-tracker-calibrate', description=__doc__.split('\n')[0])
+    add_version(parser, 'smarticle_tracking')
     parser.add_argument('--out', default=None, help='calibration YAML to write')
     parser.add_argument('--image', help='frame with the calibration tags (any format OpenCV reads)')
     parser.add_argument('--targets', help='YAML with tag_size and tags: {id: [x, y, heading_deg]}')

@@ -17,8 +17,8 @@ from smarticle_driver.errors import BridgeConfigError
 from smarticle_driver.maestro import MaestroBoard
 from smarticle_common.params import read_defaults_yaml
 from smarticle_driver import maestro
-from smarticle_driver.servo_bridge_core import (NODE_NAME, BridgeConfig, Level, ServoBridgeCore,
-                                                StepResult, check_command)
+from smarticle_driver.servo_bridge_core import (BOARD_SPEED_MARGIN, MAX_STROKE_DELAY, NODE_NAME, STROKE_GAP,
+                                                BridgeConfig, Level, ServoBridgeCore, StepResult, check_command)
 from tests.helpers.fake_board import open_board, running_emulator, wait_until
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -34,11 +34,54 @@ def emulator(tmp_path: Path) -> Iterator[MaestroEmulator]:
 
 @pytest.fixture
 def core(emulator: MaestroEmulator) -> Iterator[ServoBridgeCore]:
+    # both arms move together in these tests (one_arm_at_a_time has its own test below)
     config = BridgeConfig(port=str(emulator.link_path), watchdog_timeout=0.2, reply_timeout=0.03,
-                          reconnect_initial=0.02, reconnect_max=0.1)
+                          reconnect_initial=0.02, reconnect_max=0.1, one_arm_at_a_time=False)
     bridge = ServoBridgeCore.from_config(config)
     yield bridge
     bridge.close()
+
+
+def test_one_arm_at_a_time_holds_a_stroke_until_the_other_arm_is_done_but_never_a_hold(
+        emulator: MaestroEmulator) -> None:
+    config = BridgeConfig(port=str(emulator.link_path), watchdog_timeout=5.0, reply_timeout=0.03)
+    core = ServoBridgeCore.from_config(config)
+    try:
+        core.step(time.monotonic())
+        core.handle_command(['arm1', 'arm2'], [0.0, 0.0], [], time.monotonic())
+        assert wait_until(lambda: not core.service(time.monotonic()).events
+                          and {r.channel for r in emulator.targets()} == {0, 1}, 1.0)   # both arms straight
+        time.sleep(0.05)
+        emulator.clear_targets()
+        sent = time.monotonic()
+        core.handle_command(['arm1', 'arm2'], [0.3, 0.0], [1.0, 1.0], sent)     # arm1: a 0.3 rad stroke
+        assert wait_until(lambda: len(emulator.targets()) >= 1, 1.0)
+        board_rate = maestro.units_to_speed(emulator.speed(0))                 # the margin, rounded up
+        assert board_rate >= 600 * 1.0 * (1 + BOARD_SPEED_MARGIN)
+        end = emulator.targets()[0].time + 0.3 * 600 / board_rate
+        time.sleep(end - 0.01 - time.monotonic())
+        arrived = time.monotonic()
+        core.handle_command(['arm1', 'arm2'], [0.3, 0.6], [1.0, 1.0], arrived)   # arm2 10 ms before arm1 ends
+        due = core.next_deadline()
+        assert due is not None and due == pytest.approx(end + STROKE_GAP, abs=0.002)
+        while time.monotonic() < due - 0.001:
+            core.service(time.monotonic())
+            assert [r.channel for r in emulator.targets()] == [0], 'arm2 started while arm1 was moving'
+            time.sleep(0.001)
+        time.sleep(0.002)
+        core.service(time.monotonic())
+        assert wait_until(lambda: len(emulator.targets()) >= 2, 1.0)
+        records = emulator.targets()
+        assert [r.channel for r in records] == [0, 1] and records[1].time >= end + STROKE_GAP - 0.001
+        # a new target of the moving arm itself (a halt's hold) is never delayed
+        core.handle_command(['arm1', 'arm2'], [0.3, 0.5], [1.0, 1.0], time.monotonic())
+        assert wait_until(lambda: [r.channel for r in emulator.targets()] == [0, 1, 1], 1.0), emulator.targets()
+        # a target arriving early in the other arm's stroke waits MAX_STROKE_DELAY at most: never far behind
+        arrived = time.monotonic()
+        core.handle_command(['arm1', 'arm2'], [-0.3, 0.5], [1.0, 1.0], arrived)
+        assert core.next_deadline() == pytest.approx(arrived + MAX_STROKE_DELAY, abs=1e-6)
+    finally:
+        core.close()
 
 
 def run(core: ServoBridgeCore, seconds: float, heartbeat: Command | None = None) -> list[StepResult]:
@@ -117,14 +160,14 @@ def test_commands_reach_the_board_and_joint_states_follow_the_slew_model(core: S
     start = core.step(time.monotonic())
     assert start.joint_positions == pytest.approx((0.5, 0.5), abs=1e-3)   # a fresh board jumps to it
     assert [(r.channel, r.pulse_us) for r in emulator.targets()] == [(0, 1800.0), (1, 1200.0)]
-    assert emulator.speed(0) == round(2.0 * 600 / 25) == emulator.speed(1)
+    assert emulator.speed(0) == math.ceil(2.0 * 600 * (1 + BOARD_SPEED_MARGIN) / 25) == emulator.speed(1)
     move: Command = (['arm1'], [-0.5], [2.0])                          # 1 rad at 2 rad/s: 0.5 s
     results = run(core, 0.25, heartbeat=move)
     moving = results[-1]
     assert moving.joint_positions is not None and moving.joint_velocities is not None
     assert -0.5 < moving.joint_positions[0] < 0.3
     assert moving.joint_positions[1] == pytest.approx(0.5, abs=1e-3)
-    assert moving.joint_velocities[0] == pytest.approx(-2.0, rel=0.01)
+    assert moving.joint_velocities[0] == pytest.approx(-2.0 * (1 + BOARD_SPEED_MARGIN), rel=0.01)  # the board's
     emulated = emulator.position_us(0)
     modelled = 1500 + 600 * core.step(time.monotonic()).joint_positions[0]  # type: ignore[index]
     assert modelled == pytest.approx(emulated, abs=600 * math.radians(1.0))   # the model mirrors the board
@@ -176,7 +219,7 @@ def test_a_huge_speed_limit_reaches_the_board_as_the_servo_top_speed_never_unlim
     fallback = core.joints[0].cal.rate_to_pulse_rate(core.config.default_speed)
     for channel in (0, 1):
         assert maestro.units_to_speed(emulator.speed(channel)) == pytest.approx(
-            top if math.isfinite(velocity) else fallback, rel=0.02)
+            (top if math.isfinite(velocity) else fallback) * (1 + BOARD_SPEED_MARGIN), rel=0.01)
     counter = 'clamped_speeds' if math.isfinite(velocity) else 'bad_speeds'
     assert getattr(core.counters, counter) == 2
 
@@ -312,7 +355,8 @@ class SlowFsr:
 
 def ordered_core(emulator: MaestroEmulator, log: list[str]) -> tuple[ServoBridgeCore, OrderedBoard, SlowFsr]:
     """A core on the emulator whose board logs its calls and whose first FSR face converts slowly."""
-    config = BridgeConfig(port=str(emulator.link_path), watchdog_timeout=30.0, reply_timeout=0.05)
+    config = BridgeConfig(port=str(emulator.link_path), watchdog_timeout=30.0, reply_timeout=0.05,
+                          one_arm_at_a_time=False)
     servos = load_servo_calibration(config.servo_calibration_path())
     fsrs: dict[str, FsrModel] = dict(load_fsr_calibration(config.fsr_calibration_path()))
     slow = SlowFsr(fsrs[topics.FSR_FACES[0]])

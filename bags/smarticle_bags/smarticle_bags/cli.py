@@ -11,6 +11,7 @@ from typing import Any
 from .errors import BagError
 from .parameters import PLAYER_PARAMS, RECORDER_PARAMS, default
 from smarticle_common.facts import GAIT_PERIOD
+from smarticle_common.cli import add_version, closed_pipe_safe
 
 PROG = 'smarticle-bag'
 
@@ -91,6 +92,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog=PROG, description='Record, replay and analyse rosbag2-compatible '
                                      'mcap bags of smarticle runs (like "ros2 bag"). ROS arguments go '
                                      'after --ros-args.')
+    add_version(parser, 'smarticle_bags')
     sub = parser.add_subparsers(dest='command', required=True, metavar='COMMAND')
     p = sub.add_parser('info', help='print a summary of a bag', description='Print a summary of a bag.')
     p.add_argument('bag', help='bag folder or .mcap file')
@@ -189,6 +191,7 @@ def _analyze(ns: argparse.Namespace) -> int:
     return 0
 
 
+@closed_pipe_safe
 def main(argv: list[str] | None = None) -> None:
     """Entry point of ``smarticle-bag``."""
     ours, ros_args = _split_ros_args(list(sys.argv[1:] if argv is None else argv))
