@@ -30,8 +30,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from smarticle_common.facts import GAIT_PERIOD, PRESETS, RobotSpec
 from smarticle_common.cli import add_version
+from smarticle_common.facts import GAIT_PERIOD, PRESETS, RobotSpec
 from smarticle_common.runs import Recording, save_npz
 
 from .demo_scenes import FEEDBACK, GLIDERS, MIN_PERIODS, TRAVEL_MIN_W, DemoScene, travelling
