@@ -133,7 +133,7 @@ def main(argv: list[str] | None = None) -> int:
     """``python -m smarticle_common.robot_model [PRESET]``: print the URDF of a preset (default small)."""
     import sys
 
-    from .facts import PRESETS, SpecError, robot_preset
+    from .facts import PRESETS, RobotSpecError, robot_preset
 
     args = sys.argv[1:] if argv is None else argv
     if args and args[0] in ('-h', '--help'):
@@ -141,7 +141,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     try:
         spec = robot_preset(args[0] if args else 'small')
-    except SpecError as err:
+    except RobotSpecError as err:
         print(f'smarticle_common.robot_model: {err}', file=sys.stderr)
         return 2
     print(urdf(spec), end='')
