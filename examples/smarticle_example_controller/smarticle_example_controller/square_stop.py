@@ -26,7 +26,7 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.time import Time
 from smarticle_common import topics
-from smarticle_common.facts import SERVO_SPEED
+from smarticle_common.facts import GAIT_PERIOD, SERVO_SPEED
 
 NODE_NAME = 'square_stop'
 
@@ -48,7 +48,7 @@ class SquareStopNode(Node):
         super().__init__(NODE_NAME, **node_options)
         self.robot_id = int(self.declare_parameter('robot_id', 0).value)
         self.amplitude = math.radians(float(self.declare_parameter('amplitude_deg', 60.0).value))
-        self.period = float(self.declare_parameter('period', 1.6).value)
+        self.period = float(self.declare_parameter('period', GAIT_PERIOD).value)
         self.start_at = float(self.declare_parameter('start_at', 0.5).value)
         self.stop_force = float(self.declare_parameter('stop_force', 5.0).value)
         self.speed = float(self.declare_parameter('speed', SERVO_SPEED).value)
