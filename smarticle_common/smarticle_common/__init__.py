@@ -14,6 +14,9 @@ Modules (no rclpy import in any of them but ``node``, the node helper):
 * ``params``: parameter tables (``ParamSpec``, ``ROBOT_ID_PARAM``) and their shipped YAML defaults;
 * ``node``: the node helper (``read_config``, ``DiagnosticsPublisher``, ``resolve_robot_id``, ``run_node``);
 * ``launching``: the process launcher of tests, benchmarks and the demo;
+* ``cli``: the command-line habits of every console script (``--version``, a closed pipe, the seed syntax);
+* ``robot_model``: a preset's URDF from ``RobotSpec`` and the TF frames of a robot from its pose and arms;
+* ``exports``: the lazy ``__all__`` of the other packages (``lazy_getattr``);
 * ``errors``: ``CommonError`` and its subclasses.
 """
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from smarticle_common.exports import lazy_getattr
+
 #: Public name -> the module that defines it.
 _EXPORTS: dict[str, str] = {
     'MaestroBoard': 'maestro', 'CommandParser': 'maestro',
@@ -14,12 +16,4 @@ _EXPORTS: dict[str, str] = {
 }
 __all__ = sorted(_EXPORTS)
 
-
-def __getattr__(name: str) -> object:
-    """A public name of ``__all__``, imported from its module on first use (importing the package stays cheap)."""
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f'module {__name__!r} has no attribute {name!r}')
-    import importlib
-
-    return getattr(importlib.import_module(f'.{module}', __name__), name)
+__getattr__ = lazy_getattr(__name__, _EXPORTS)
