@@ -1,7 +1,9 @@
 """The robot model on ROS: ``/smarticle_<k>/robot_description`` and TF (``/tf``) for every robot of a run.
 
-``transform_messages`` turns poses and arm angles into geometry_msgs/TransformStamped (``arena ->
-smarticle_<k>/body -> smarticle_<k>/arm1_link, smarticle_<k>/arm2_link``, from ``robot_model.robot_frames``).
+``robot_transforms`` turns poses and arm angles into the transforms of every robot (``arena ->
+smarticle_<k>/body -> smarticle_<k>/arm1_link, smarticle_<k>/arm2_link``, from ``robot_model.robot_frames``);
+``transform_messages`` gives them as geometry_msgs/TransformStamped (the live view sends the same transforms
+to Foxglove).
 ``RobotModelPublisher`` is what a node (the sim bridge, the tracker) holds: it latches each robot's URDF on
 ``/smarticle_<k>/robot_description`` (std_msgs/String, transient local like robot_state_publisher; RViz's
 RobotModel display takes the topic and the TF prefix ``smarticle_<k>``) and publishes the transforms on
@@ -22,7 +24,7 @@ from geometry_msgs.msg import TransformStamped
 
 from . import topics
 from .facts import RobotSpec
-from .robot_model import robot_frames, urdf
+from .robot_model import Transform, robot_frames, urdf
 
 #: The TF topic and its message type (tf2_msgs, part of every ROS install; not on PyPI).
 TF_TOPIC = '/tf'
@@ -42,12 +44,12 @@ def body_position(spec: RobotSpec, x: float, y: float) -> tuple[float, float, fl
     return (x, y, spec.body_height / 2.0)
 
 
-def transform_messages(poses: Any, arm_angles: Any, spec: RobotSpec, stamp: Any) -> list[TransformStamped]:
-    """TransformStamped of every robot: row k of ``poses`` is (x m, y m, heading rad), row k of ``arm_angles``
+def robot_transforms(poses: Any, arm_angles: Any, spec: RobotSpec) -> list[Transform]:
+    """Transforms of every robot: row k of ``poses`` is (x m, y m, heading rad), row k of ``arm_angles``
     (alpha1, alpha2) rad; a robot with a non-finite pose is left out, non-finite arm angles count as 0."""
     if len(arm_angles) != len(poses):
         raise ValueError(f'{len(poses)} poses but {len(arm_angles)} rows of arm angles')
-    out: list[TransformStamped] = []
+    out: list[Transform] = []
     for k, (pose, alphas) in enumerate(zip(poses, arm_angles, strict=True)):
         x, y, heading = (float(v) for v in pose)
         if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(heading)):
@@ -56,15 +58,22 @@ def transform_messages(poses: Any, arm_angles: Any, spec: RobotSpec, stamp: Any)
         if len(arms) != 2:
             raise ValueError(f'robot {k}: two arm angles expected, got {len(arms)}')
         orientation = (0.0, 0.0, math.sin(heading / 2.0), math.cos(heading / 2.0))
-        for t in robot_frames(k, body_position(spec, x, y), orientation, (arms[0], arms[1]), spec):
-            msg = TransformStamped()
-            msg.header.stamp = stamp
-            msg.header.frame_id = t.parent
-            msg.child_frame_id = t.child
-            msg.transform.translation.x, msg.transform.translation.y, msg.transform.translation.z = t.translation
-            (msg.transform.rotation.x, msg.transform.rotation.y, msg.transform.rotation.z,
-             msg.transform.rotation.w) = t.rotation
-            out.append(msg)
+        out += robot_frames(k, body_position(spec, x, y), orientation, (arms[0], arms[1]), spec)
+    return out
+
+
+def transform_messages(poses: Any, arm_angles: Any, spec: RobotSpec, stamp: Any) -> list[TransformStamped]:
+    """geometry_msgs/TransformStamped of ``robot_transforms(poses, arm_angles, spec)``, stamped ``stamp``."""
+    out: list[TransformStamped] = []
+    for t in robot_transforms(poses, arm_angles, spec):
+        msg = TransformStamped()
+        msg.header.stamp = stamp
+        msg.header.frame_id = t.parent
+        msg.child_frame_id = t.child
+        msg.transform.translation.x, msg.transform.translation.y, msg.transform.translation.z = t.translation
+        (msg.transform.rotation.x, msg.transform.rotation.y, msg.transform.rotation.z,
+         msg.transform.rotation.w) = t.rotation
+        out.append(msg)
     return out
 
 
