@@ -17,7 +17,6 @@ by the tracker) gets no transform in that sample.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from typing import Any
 
 from geometry_msgs.msg import TransformStamped
@@ -103,9 +102,9 @@ class RobotModelPublisher:
         """Key/value for the node's /diagnostics: whether /tf is published."""
         return {'tf': 'on' if self.tf_pub is not None else 'off (tf2_msgs not installed)'}
 
-    def publish(self, stamp: Any, poses: Any, arm_angles: Sequence[Any]) -> list[TransformStamped]:
+    def publish(self, stamp: Any, poses: Any, arm_angles: Any) -> list[TransformStamped]:
         """Publish the transforms of one sample on /tf (if on and subscribed); return what was sent."""
-        if self.tf_pub is None or self.tf_pub.get_subscription_count() == 0:
+        if self.TFMessage is None or self.tf_pub is None or self.tf_pub.get_subscription_count() == 0:
             return []        # nobody listens: nothing built (a new subscriber gets the next sample)
         transforms = transform_messages(poses, arm_angles, self.spec, stamp)
         if transforms:
