@@ -49,7 +49,8 @@ ROSDEP_KEYS: dict[str, str] = {
 }
 #: ROS 2 packages the code imports by their own name (client library, message packages).
 ROS_PACKAGES = {'rclpy', 'std_msgs', 'sensor_msgs', 'geometry_msgs', 'diagnostic_msgs', 'visualization_msgs',
-                'rosgraph_msgs', 'rcl_interfaces', 'lifecycle_msgs', 'builtin_interfaces', 'ament_index_python'}
+                'rosgraph_msgs', 'rcl_interfaces', 'lifecycle_msgs', 'builtin_interfaces', 'ament_index_python',
+                'tf2_msgs'}
 PACKAGE_XMLS = (sorted(ROOT.glob('*/package.xml')) + sorted(ROOT.glob('bags/*/package.xml'))
                 + sorted(ROOT.glob('examples/*/package.xml')))
 OURS = {p.parent.name for p in PACKAGE_XMLS}

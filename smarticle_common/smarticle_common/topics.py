@@ -125,6 +125,10 @@ TOPICS: tuple[TopicSpec, ...] = (
     TopicSpec('pose', _R + '/pose', 'geometry_msgs/msg/PoseStamped', Qos.SENSOR,
               ARENA_FRAME, 'm, quaternion', 'tracker or sim bridge',
               'planar pose of this robot: body centre, yaw = heading of the body normal'),
+    TopicSpec('robot_description', _R + '/robot_description', 'std_msgs/msg/String', Qos.LATCHED,
+              '', 'm, kg (URDF)', 'sim bridge or tracker',
+              'URDF of this robot\'s preset: links body, arm1_link, arm2_link on joints arm1, arm2; TF frames are '
+              'smarticle_<k>/<link> (RViz RobotModel: this topic, TF prefix smarticle_<k>)'),
     TopicSpec('start', '/smarticles/start', 'std_msgs/msg/Header', Qos.LATCHED,
               '', 's (stamp)', 'operator or test',
               'synchronised gait start: every gait node starts its period at header.stamp'),

@@ -2,8 +2,9 @@
 
 For every robot k it subscribes to ``/smarticle_<k>/joint_commands`` and publishes
 ``/smarticle_<k>/joint_states``, ``/smarticle_<k>/fsr`` (only while someone subscribes) and
-``/smarticle_<k>/pose`` (likewise); arena-wide it publishes ``/smarticles/poses``, ``/clock`` and
-``/diagnostics``, and optionally ``/smarticles/start``. Run the gait nodes with ``use_sim_time:=true``
+``/smarticle_<k>/pose`` (likewise) and latches ``/smarticle_<k>/robot_description``; arena-wide it
+publishes ``/smarticles/poses``, ``/tf`` (where tf2_msgs is installed), ``/clock`` and ``/diagnostics``,
+and optionally ``/smarticles/start``. Run the gait nodes with ``use_sim_time:=true``
 (and ``lockstep:=true`` in lock-step mode). See docs/sim_bridge.md.
 """
 
@@ -23,6 +24,7 @@ from rclpy.time import Time
 from smarticle_common import topics
 from smarticle_common.messages import pose_message
 from smarticle_common.node import DiagnosticsPublisher, read_config, run_node
+from smarticle_common.robot_tf import RobotModelPublisher
 from smarticle_common.params import ParameterError
 
 from .bridge import NODE_NAME, PARAMS, BridgeSettings, SimBridgeCore
@@ -58,6 +60,7 @@ class SimBridgeNode(Node):
         self.clock_pub = self.create_publisher(self.Clock, topics.topic('clock'), qos['clock'])
         self.poses_pub = self.create_publisher(self.PoseArray, topics.topic('poses'), qos['poses'])
         self.diagnostics = DiagnosticsPublisher(self, NODE_NAME, 'pybullet')
+        self.robot_model = RobotModelPublisher(self, n, self.settings.sim.robot)   # descriptions and /tf
         # per-robot outputs without QoS-event handlers: each one would add two waitables to every
         # executor wait, which dominates the lock-step loop with many robots
         quiet = PublisherEventCallbacks(use_default_callbacks=False)
@@ -177,6 +180,7 @@ class SimBridgeNode(Node):
         array.header.frame_id = topics.ARENA_FRAME
         array.poses = [pose_message(p) for p in poses]
         self.poses_pub.publish(array)
+        self.robot_model.publish(now, poses, state.arm_angles)
         for k, pub in enumerate(self.pose_pubs):
             if pub.get_subscription_count() > 0:
                 msg = self.PoseStamped()
@@ -236,7 +240,8 @@ class SimBridgeNode(Node):
     def publish_diagnostics(self, level: int, message: str, rtf: float) -> None:
         """Publish the bridge's status and counters on /diagnostics."""
         self.diagnostics.publish(level, message, {'sim_time': f'{self.core.time:.3f}',
-                                                  'real_time_factor': f'{rtf:.2f}', **self.counts})
+                                                  'real_time_factor': f'{rtf:.2f}', **self.counts,
+                                                  **self.robot_model.status()})
 
     def destroy_node(self) -> None:
         """Release the physics client, then the node."""

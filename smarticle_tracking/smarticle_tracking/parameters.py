@@ -20,7 +20,7 @@ from .gliders import DEFAULT_ISOLATION_DISTANCE, DEFAULT_R_BIND, GliderConfig
 from .markers import RobotDims
 from smarticle_common.pairs import BODY_LENGTH
 from .tracker import TrackerConfig
-from smarticle_common.facts import GAIT_PERIOD, SMALL, TAG_DICTIONARY, TAG_SIZE
+from smarticle_common.facts import GAIT_PERIOD, PRESETS, SMALL, TAG_DICTIONARY, TAG_SIZE
 
 TRACKER_NODE = 'tracker'
 MONITOR_NODE = 'glider_monitor'
@@ -44,6 +44,8 @@ TRACKER_PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec('refine', True, 'sub-pixel corner refinement on the full-size frame'),
     ParamSpec('image_reliable', True, 'subscribe to the frames with reliable QoS (large frames survive; the sim '
               'publishes reliable); false = best effort, for camera drivers that publish best effort'),
+    ParamSpec('preset', SMALL.name, 'robot preset of /smarticle_<k>/robot_description and TF: '
+              f'{", ".join(sorted(PRESETS))}'),
 )
 
 MONITOR_PARAMS: tuple[ParamSpec, ...] = (

@@ -5,12 +5,15 @@ exactly one PoseArray (index = robot id) stamped with the frame's stamp: a robot
 found, or was rejected, gets the unseen pose (``topics.UNSEEN_Z``: finite, so RViz accepts the message;
 never an old pose), and so does every robot of a frame the tracker cannot use (unsupported encoding,
 wrong size for the calibration, no calibration). Problems are logged (throttled) and counted on
-/diagnostics; the node keeps running. See docs/tracking.md.
+/diagnostics; the node keeps running. It also latches ``/smarticle_<k>/robot_description`` (the URDF of
+``preset``) and, where tf2_msgs is installed, publishes each frame's TF (arena -> ``smarticle_<k>/body`` ->
+arm links, the arms from ``/smarticle_<k>/joint_states``). See docs/tracking.md and docs/bringup.md.
 """
 
 from __future__ import annotations
 
 import math
+import functools
 import time
 from typing import Any
 
@@ -20,9 +23,11 @@ from geometry_msgs.msg import PoseArray, PoseStamped
 from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.node import Node
 from smarticle_common import topics
+from smarticle_common.facts import RobotSpecError, robot_preset
 from smarticle_common.messages import pose_message
 from smarticle_common.node import ERROR, OK, DiagnosticsPublisher, read_config, run_node
 from smarticle_common.params import ParameterError
+from smarticle_common.robot_tf import RobotModelPublisher
 
 from .errors import CameraCalibrationError, FrameEncodingError, FrameSizeError, TrackerError
 from .parameters import TRACKER_NODE, TRACKER_PARAMS, tracker_calibration, tracker_config
@@ -50,6 +55,18 @@ class TrackerNode(Node):
         self.pose_pubs = [self.create_publisher(PoseStamped, topics.topic('pose', k), qos['pose'],
                                                 event_callbacks=quiet) for k in range(n)]
         self.diagnostics = DiagnosticsPublisher(self, TRACKER_NODE, 'overhead_camera')
+        try:
+            spec = robot_preset(values['preset'])
+        except RobotSpecError as err:
+            raise ParameterError(f'node {TRACKER_NODE}: {err}') from None
+        self.robot_model = RobotModelPublisher(self, n, spec)   # descriptions and /tf
+        #: Latest arm angles (rad) of each robot from its joint states (0 until one arrives), for TF.
+        self.arms = np.zeros((n, 2))
+        if self.robot_model.tf_pub is not None:
+            joint_type = topics.message_class(topics.spec_of('joint_states').type)
+            for k in range(n):
+                self.create_subscription(joint_type, topics.topic('joint_states', k),
+                                         functools.partial(self.on_joint_state, k), qos['joint_states'])
         image_type = topics.message_class(topics.spec_of('image_raw').type)
         info_type = topics.message_class(topics.spec_of('camera_info').type)
         image_qos = qos['image_raw'] if values['image_reliable'] else topics.qos_profile(topics.Qos.SENSOR)
@@ -87,6 +104,14 @@ class TrackerNode(Node):
             self.camera_matrix = k.reshape(3, 3)
             self.dist_coeffs = d if d.size and np.any(d != 0.0) else None
 
+    def on_joint_state(self, robot: int, msg: Any) -> None:
+        """Keep robot ``robot``'s arm angles for its TF (missing or non-finite angles leave the last ones)."""
+        angles = dict(zip(msg.name, msg.position, strict=False))
+        for j, name in enumerate(topics.JOINT_NAMES):
+            value = angles.get(name)
+            if value is not None and math.isfinite(value):
+                self.arms[robot, j] = value
+
     def on_image(self, msg: Any) -> None:
         """Track one frame and publish its poses (missing ones as the unseen pose)."""
         self.counts['frames'] += 1
@@ -123,6 +148,7 @@ class TrackerNode(Node):
         for k, pub in enumerate(self.pose_pubs):
             if pub.get_subscription_count() > 0:
                 pub.publish(PoseStamped(header=array.header, pose=array.poses[k]))
+        self.robot_model.publish(stamp, poses, self.arms)
 
     def publish_diagnostics(self) -> None:
         """Publish status and counters on /diagnostics."""
@@ -130,7 +156,7 @@ class TrackerNode(Node):
         message = self.calibration_problem or f'{frames} frames'
         rate = self.seen_total / max(frames * self.config.n_robots, 1)
         self.diagnostics.publish(ERROR if self.tracker is None else OK, message,
-                                 {**self.counts, 'detection_rate': f'{rate:.4f}'})
+                                 {**self.counts, 'detection_rate': f'{rate:.4f}', **self.robot_model.status()})
 
 
 def main(args: list[str] | None = None) -> None:

@@ -4,6 +4,7 @@ and the live view's scene over a real WebSocket."""
 from __future__ import annotations
 
 import json
+import math
 import signal
 import socket
 import struct
@@ -77,8 +78,9 @@ def free_port() -> int:
         return int(sock.getsockname()[1])
 
 
-def scene_updates(port: int, count: int, timeout: float) -> list[bytes]:
-    """Connect to the Foxglove WebSocket server, subscribe to /smarticles/scene, return ``count`` payloads."""
+def foxglove_messages(port: int, schemas: dict[str, str], count: int, timeout: float) -> dict[str, list[bytes]]:
+    """Connect to the Foxglove WebSocket server, subscribe to the channels ``schemas`` names (topic -> schema
+    name, checked), return their payloads once the first channel has ``count`` (or the time is up)."""
     from websockets.sync.client import connect
 
     deadline = time.monotonic() + timeout
@@ -91,30 +93,83 @@ def scene_updates(port: int, count: int, timeout: float) -> list[bytes]:
             if time.monotonic() > deadline:
                 raise
             time.sleep(0.2)
-    payloads: list[bytes] = []
+    names = list(schemas)
+    payloads: dict[str, list[bytes]] = {name: [] for name in names}
+    subscribed: set[str] = set()
     with ws:
-        while len(payloads) < count and time.monotonic() < deadline:
+        while len(payloads[names[0]]) < count and time.monotonic() < deadline:
             message = ws.recv(timeout=max(deadline - time.monotonic(), 0.1))
             if isinstance(message, str):
                 data = json.loads(message)
                 if data['op'] == 'advertise':
-                    channels = [c for c in data['channels'] if c['topic'] == '/smarticles/scene']
-                    assert channels and channels[0]['schemaName'] == 'foxglove.SceneUpdate', data
-                    ws.send(json.dumps({'op': 'subscribe',
-                                        'subscriptions': [{'id': 1, 'channelId': channels[0]['id']}]}))
+                    wanted = [c for c in data['channels'] if c['topic'] in schemas and c['topic'] not in subscribed]
+                    for channel in wanted:
+                        assert channel['schemaName'] == schemas[channel['topic']], channel
+                        subscribed.add(channel['topic'])
+                    ws.send(json.dumps({'op': 'subscribe', 'subscriptions': [
+                        {'id': names.index(c['topic']) + 1, 'channelId': c['id']} for c in wanted]}))
             else:
                 opcode, subscription, _stamp = message[0], *struct.unpack_from('<IQ', message, 1)
-                assert opcode == 1 and subscription == 1
-                payloads.append(bytes(message[13:]))
+                assert opcode == 1 and 1 <= subscription <= len(names)
+                payloads[names[subscription - 1]].append(bytes(message[13:]))
     return payloads
 
 
+def protobuf_fields(data: bytes) -> list[tuple[int, Any]]:
+    """(field number, value) of a protobuf message: varints as int, fixed64 as float, length-delimited as bytes."""
+    out: list[tuple[int, Any]] = []
+    i = 0
+
+    def varint() -> int:
+        nonlocal i
+        value, shift = 0, 0
+        while True:
+            byte = data[i]
+            i += 1
+            value |= (byte & 0x7F) << shift
+            shift += 7
+            if byte < 0x80:
+                return value
+    while i < len(data):
+        key = varint()
+        number, wire = key >> 3, key & 7
+        if wire == 0:
+            out.append((number, varint()))
+        elif wire == 1:
+            out.append((number, struct.unpack_from('<d', data, i)[0]))
+            i += 8
+        elif wire == 2:
+            size = varint()
+            out.append((number, data[i:i + size]))
+            i += size
+        elif wire == 5:
+            out.append((number, struct.unpack_from('<f', data, i)[0]))
+            i += 4
+        else:
+            raise ValueError(f'protobuf wire type {wire} not expected')
+    return out
+
+
+def frame_transforms(payload: bytes) -> dict[str, tuple[str, tuple[float, ...], tuple[float, ...]]]:
+    """A foxglove.FrameTransforms payload as child frame -> (parent, translation xyz, rotation xyzw)."""
+    out = {}
+    for _, transform in protobuf_fields(payload):          # field 1: repeated FrameTransform
+        fields = dict(protobuf_fields(transform))
+        vector = dict(protobuf_fields(fields.get(4, b'')))
+        quaternion = dict(protobuf_fields(fields.get(5, b'')))
+        out[fields[3].decode()] = (fields[2].decode(), tuple(vector.get(n, 0.0) for n in (1, 2, 3)),
+                                   tuple(quaternion.get(n, 0.0) for n in (1, 2, 3, 4)))
+    return out
+
+
 @pytest.mark.integration
-def test_the_live_view_sends_scene_updates_for_every_robot(tmp_path: Path) -> None:
+def test_the_live_view_sends_scene_updates_and_frames_for_every_robot(tmp_path: Path) -> None:
     port = free_port()
     proc = launch(tmp_path, 'view', 'robots:=2', 'view:=true', f'view_port:={port}', 'wait_for_subscribers:=2')
     try:
-        payloads = scene_updates(port, 60, 40.0)
+        received = foxglove_messages(port, {'/smarticles/scene': 'foxglove.SceneUpdate',
+                                            '/tf': 'foxglove.FrameTransforms'}, 60, 40.0)
+        payloads = received['/smarticles/scene']
         full = [p for p in payloads if all(f'robot_{k}'.encode() in p for k in range(2))]
         assert len(full) >= 10, (len(payloads), logs(tmp_path, 'view'))
         last = full[-1]                   # bodies and arms as cubes, trails, the robots' ids as labels
@@ -124,6 +179,21 @@ def test_the_live_view_sends_scene_updates_for_every_robot(tmp_path: Path) -> No
         out = proc.communicate(timeout=30)[0]
     assert proc.returncode == 0, out
     assert 'serving the live view on ws://127.0.0.1' in logs(tmp_path, 'view')
+    frames = [frame_transforms(p) for p in received['/tf']]
+    children = {f'smarticle_{k}/{link}' for k in range(2) for link in ('body', 'arm1_link', 'arm2_link')}
+    complete = [f for f in frames if set(f) == children]
+    assert len(complete) >= 10, (len(frames), [sorted(f) for f in frames[:3]])
+    for frame in complete:
+        for k in range(2):
+            assert frame[f'smarticle_{k}/body'][0] == 'arena'
+            assert frame[f'smarticle_{k}/arm1_link'][0] == frame[f'smarticle_{k}/arm2_link'][0] == f'smarticle_{k}/body'
+            assert math.isclose(sum(v * v for v in frame[f'smarticle_{k}/body'][2]), 1.0, rel_tol=1e-9)
+    # over the run the robots move (their body frames) and the gait turns the arms (the arm frames' rotation)
+    first, last_frame = complete[0], complete[-1]
+    for k in range(2):
+        assert math.dist(first[f'smarticle_{k}/body'][1], last_frame[f'smarticle_{k}/body'][1]) > 1e-4
+    arm_yaws = {2.0 * math.atan2(f['smarticle_0/arm2_link'][2][2], f['smarticle_0/arm2_link'][2][3]) for f in complete}
+    assert max(arm_yaws) - min(arm_yaws) > math.radians(30.0)
 
 
 def test_the_controller_argument_runs_the_example_controller_in_place_of_the_gait(ros_node: Any,

@@ -202,3 +202,51 @@ def test_sim_camera_tracker_and_monitor_find_the_glider(nodes, ros_node, tmp_pat
         assert float(values['r']) == pytest.approx(r_true, abs=2e-3)
         assert values['class'] == 'C1'
     assert tracker.poll() is None and monitor.poll() is None
+
+
+def test_tracker_latches_the_robot_descriptions_and_says_whether_tf_is_on(nodes, ros_node) -> None:  # type: ignore[no-untyped-def]
+    from diagnostic_msgs.msg import DiagnosticArray
+    from geometry_msgs.msg import PoseArray
+    from sensor_msgs.msg import Image
+    from smarticle_common.facts import robot_preset
+    from smarticle_common.robot_model import urdf
+    from smarticle_common.robot_tf import TF_TOPIC, tf_message_class
+
+    tracker = nodes.start('tracker', '--ros-args', '-p', 'tag_ids:=[0, 1]', '-p', 'preset:=feedback')
+    node = ros_node('tracker_model_probe')
+    String = topics.message_class(topics.spec_of('robot_description').type)
+    latched = topics.qos_profile(topics.spec_of('robot_description').qos)
+    descriptions: dict[int, str] = {}
+    for k in range(2):
+        node.create_subscription(String, topics.topic('robot_description', k),
+                                 lambda msg, k=k: descriptions.__setitem__(k, msg.data), latched)
+    status: dict[str, str] = {}
+    node.create_subscription(DiagnosticArray, '/diagnostics', lambda msg: status.update(
+        {v.key: v.value for s in msg.status if s.name == 'tracker' for v in s.values}), _reliable())
+    TFMessage = tf_message_class()
+    tf: list[Any] = []
+    if TFMessage is not None:
+        node.create_subscription(TFMessage, TF_TOPIC, tf.append, _reliable())
+    poses: list[Any] = []
+    node.create_subscription(PoseArray, topics.topic('poses'), poses.append, _deep_best_effort())
+    assert spin_until(node, lambda: len(descriptions) == 2 and 'tf' in status, 20.0), nodes.output(tracker)
+    assert descriptions[0] == descriptions[1] == urdf(robot_preset('feedback'))
+    assert status['tf'] == ('on' if TFMessage is not None else 'off (tf2_msgs not installed)')
+    log = nodes.output(tracker)
+    assert log.count('/tf is off') == (0 if TFMessage is not None else 1), log
+    if TFMessage is None:
+        return      # /tf itself needs tf2_msgs (a ROS install): the rest checks the frames of a tracked frame
+    pub = node.create_publisher(Image, topics.topic('image_raw'), _reliable())
+    assert spin_until(node, lambda: pub.get_subscription_count() >= 1 and node.count_subscribers(TF_TOPIC) >= 1
+                      and node.count_publishers(TF_TOPIC) >= 1, 20.0)
+    truth = np.array([[0.05, -0.02, 0.7], [-0.1, 0.08, -2.0]])
+    frame = OverheadCamera(CameraConfig()).render(truth)
+    msg = Image(height=frame.shape[0], width=frame.shape[1], encoding='mono8', step=frame.shape[1],
+                data=array.array('B', frame.tobytes()))
+    msg.header.stamp.sec = 1
+    pub.publish(msg)
+    assert spin_until(node, lambda: bool(tf), 20.0), nodes.output(tracker)
+    bodies = {t.child_frame_id: t for t in tf[0].transforms if t.child_frame_id.endswith('/body')}
+    for k, (x, y, _) in enumerate(truth):
+        t = bodies[f'smarticle_{k}/body'].transform.translation
+        assert math.hypot(t.x - x, t.y - y) < 1e-3
