@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import pytest
 
-from smarticle_experiments.results import InadmissiblePairResult, P6Result, SingleResult
+from smarticle_experiments.errors import ResultError
+from smarticle_experiments.results import (RESULT_TYPES, DenseResult, GliderRecord, InadmissiblePairResult, P6Result,
+                                           PairResult, SingleResult, read_result)
 
 
 def test_optional_fields_are_stored_only_when_set_and_read_back() -> None:
@@ -28,3 +31,81 @@ def test_a_stored_result_missing_a_required_field_is_refused() -> None:
                                  trouble='', gliders=[])
     assert bad.as_dict() == {'r0_bl': 0.3, 'theta0_deg': 0.0, 'phi0_deg': 180.0, 'admissible': False,
                              'why': 'overlap', 'trouble': '', 'gliders': []}
+
+
+GLIDER = {'i': 0, 'j': 3, 'class': 'C2', 'start_period': 4, 'lifetime_periods': 120, 'ongoing': False, 'r_bl': 1.52,
+          'theta_deg': 331.0, 'phi_deg': 8.5, 'distance_w': 2.9, 'path_w': 3.4, 'v_com_w_per_period': 0.024,
+          'beta': None, 'isolated': True, 'isolation': 0.95, 'com_path_w': [[0.0, 0.0], [None, None], [0.05, 0.01]]}
+DENSE = {'periods_run': 300.0, 'trouble': '', 'peak_tilt_deg': 1.2, 'peak_overlap_mm': None, 'n_gliders': 2,
+         'positive': True, 'positive_isolated': True, 'longest_periods': 120, 'longest_class': 'C2',
+         'longest_distance_w': 2.9, 'gliders': [GLIDER, {**GLIDER, 'class': 'C1', 'contact_fraction': 0.4}],
+         'trajectory_bl': [[[0.0, 0.0], [1.0, None]]], 'trajectory_dt': 1.6}
+PAIR = {**DENSE, 'r0_bl': 1.3, 'theta0_deg': 0.0, 'phi0_deg': 180.0, 'admissible': True, 'bound_tail_periods': 5,
+        'bound_at_end': True, 'colliding_tail_periods': 5, 'colliding_at_end': True, 'out_of_reach_at_end': False,
+        'late_w': 1.1, 'r_end_bl': 1.4, 'phi_end_deg': 181.0}
+#: One stored result of each kind with a type (as the store writes it: JSON of ``as_dict()``).
+STORED = {
+    'dense': DENSE, 'pair': PAIR, 'pair_mujoco': {**PAIR, 'gliders': []},
+    'single': {'heading_deg': -20.0, 'trouble': '', 'cycles': 20, 'drift_um_per_cycle': 75.0,
+               'step_um_per_cycle': None},
+    'p6': {'lifetime_periods': 40, 'censored': False, 'halts': 2, 'trouble': '', 'r0_bl': 1.47, 'theta0_deg': 99.0,
+           'phi0_deg': 7.0, 'final_r_bl': 2.0, 'travel_w': 0.4, 'contact_periods': [1, 2]},
+    'c2_harvest': {'samples': [{'seed': 0, 'i': 0, 'j': 1, 'period': 5, 'r_bl': 1.5}], 'gliders': 1, 'trouble': ''},
+    'accuracy': {'trouble': '', 'wall_per_sim_s': 0.2, 'xy1_bl': [[0.0, 0.1], [1.3, 0.0]], 'xy10_bl': None,
+                 'r_mean_bl': 1.35, 'drift_um_per_cycle': 70.2},
+}
+
+
+@pytest.mark.parametrize('kind', sorted(STORED))
+def test_each_kinds_stored_result_reads_back_typed_and_writes_the_same_bytes(kind: str) -> None:
+    text = json.dumps(STORED[kind], sort_keys=True, separators=(',', ':'))
+    typed = read_result(kind, json.loads(text))
+    assert isinstance(typed, RESULT_TYPES[kind])
+    assert list(typed.as_dict()) == list(STORED[kind])            # the stored key order, key for key
+    assert json.dumps(typed.as_dict(), sort_keys=True, separators=(',', ':')) == text
+
+
+def test_gliders_read_back_as_records_with_the_stored_class_key() -> None:
+    dense = read_result('dense', DENSE)
+    assert isinstance(dense, DenseResult)
+    first, second = dense.gliders
+    assert isinstance(first, GliderRecord) and first.glider_class == 'C2' and first.contact_fraction is None
+    assert second.glider_class == 'C1' and second.contact_fraction == 0.4
+    assert first.as_dict() == GLIDER and 'glider_class' not in first.as_dict()
+    # a kind without a class rename stores exactly what dataclasses.asdict gives
+    single = read_result('single', STORED['single'])
+    assert dataclasses.asdict(single) == STORED['single']
+
+
+def test_an_inadmissible_pair_start_reads_as_its_own_type_and_a_misfit_is_refused() -> None:
+    stored = {'r0_bl': 0.3, 'theta0_deg': 0.0, 'phi0_deg': 180.0, 'admissible': False, 'why': 'overlap',
+              'trouble': '', 'gliders': []}
+    assert read_result('pair', stored) == InadmissiblePairResult(**stored)
+    with pytest.raises(ResultError, match='does not fit PairResult'):
+        read_result('pair', {'admissible': True, 'trouble': '', 'gliders': []})
+    assert read_result('tests.smarticle_experiments.fake_trials:flaky', {'value': 3, 'trouble': ''}) == \
+        {'value': 3, 'trouble': ''}    # a user's kind stays a dict
+
+
+def test_a_real_pair_trial_is_stored_and_read_back_unchanged() -> None:
+    from smarticle_experiments.trials import KINDS, run_kind
+
+    stored = run_kind('pair', {**KINDS['pair'].defaults, 'periods': 3.0, 'min_periods': 1}, 0)
+    text = json.dumps(stored, sort_keys=True, separators=(',', ':'))
+    typed = read_result('pair', json.loads(text))
+    assert isinstance(typed, PairResult) and typed.periods_run > 0
+    assert json.dumps(typed.as_dict(), sort_keys=True, separators=(',', ':')) == text
+
+
+def test_a_report_section_reads_typed_records() -> None:
+    from smarticle_experiments.report import basin_outcome, long_gliders_table
+    from smarticle_experiments.spec import spec_from_mapping
+
+    trial = spec_from_mapping({'name': 'typed', 'kind': 'dense', 'seeds': [0]}).trials({})[0]
+    dense = read_result('dense', DENSE)
+    assert isinstance(dense, DenseResult)
+    table = '\n'.join(long_gliders_table([(trial, dense)], 100))
+    assert '| C2 | 1 | 1.52 [1.52, 1.52] | 2.42 [2.42, 2.42] | 1 |' in table
+    assert '| all | 2 |' in table and '| isolated | 2 |' in table
+    pair = read_result('pair', PAIR)
+    assert isinstance(pair, PairResult) and basin_outcome(pair) == 'bound'
