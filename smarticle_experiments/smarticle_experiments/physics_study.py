@@ -34,6 +34,8 @@ from smarticle_sim.settings import PhysicsConfig, SimConfig
 
 from .configs import make_config
 from .errors import SpecError
+from .results import (StudyCollisionResult, StudyDenseResult, StudyDriftResult, StudyImpactResult,
+                      StudyInadmissibleResult, StudyPairResult)
 
 #: Body length (m) of the robot the study measures (the small preset's): lengths in the rows are in BL.
 BL = BODY_LENGTH
@@ -434,7 +436,7 @@ def _settings(p: Mapping[str, Any]) -> dict[str, Any]:
     return dict(p.get('settings') or {})
 
 
-def study_collision_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+def study_collision_trial(p: Mapping[str, Any], seed: int) -> StudyCollisionResult | StudyInadmissibleResult:
     """A pair from (``r_bl``, ``theta_deg``, ``phi_deg``), both robots at gait phase ``phase``, stepped with every
     contact impulse measured: collisions, separating impulses (N s), dr in contact and coasting (BL), contact in
     the last 10 periods (``summarise_trace``); an overlapping start is ``admissible: false``."""
@@ -442,35 +444,35 @@ def study_collision_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
         trace = collide(_settings(p), float(p['theta_deg']), float(p['phi_deg']), (float(p['phase']),) * 2,
                         float(p['periods']), float(p['r_bl']))
     except SceneError as exc:
-        return {'admissible': False, 'why': str(exc), 'trouble': ''}
-    return {'admissible': True, **summarise_trace(trace, trace['period'])}
+        return StudyInadmissibleResult(admissible=False, why=str(exc), trouble='')
+    return StudyCollisionResult(admissible=True, **summarise_trace(trace, trace['period']))
 
 
-def study_drift_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+def study_drift_trial(p: Mapping[str, Any], seed: int) -> StudyDriftResult:
     """A lone robot at heading ``heading_deg``: net drift per cycle (um) after ``skip`` periods, its tilt."""
-    return drift_run(_settings(p), float(p['heading_deg']), int(p['periods']), int(p['skip']),
-                     float(p['alpha_max_deg']))
+    return StudyDriftResult(**drift_run(_settings(p), float(p['heading_deg']), int(p['periods']), int(p['skip']),
+                                        float(p['alpha_max_deg'])))
 
 
-def study_pair_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+def study_pair_trial(p: Mapping[str, Any], seed: int) -> StudyPairResult | StudyInadmissibleResult:
     """A pair from pair coordinates at phases (``phase1``, ``phase2``): contact per period, the longest touching
     run, r and phi late, travel (``pair_run``); an overlapping start is ``admissible: false``."""
     try:
         row = pair_run(_settings(p), float(p['theta_deg']), float(p['phi_deg']),
                        (float(p['phase1']), float(p['phase2'])), int(p['periods']), float(p['r_bl']))
     except SceneError as exc:
-        return {'admissible': False, 'why': str(exc), 'trouble': ''}
-    return {'admissible': True, **row}
+        return StudyInadmissibleResult(admissible=False, why=str(exc), trouble='')
+    return StudyPairResult(admissible=True, **row)
 
 
-def study_dense_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+def study_dense_trial(p: Mapping[str, Any], seed: int) -> StudyDenseResult:
     """``robots`` robots densely packed (seeded), phase offsets within +-``jitter``: trouble, deepest overlap and,
     for 7 robots, gliders of >= 30 and >= 100 periods, isolated ones, C1 / C2 lifetimes (``dense_run``)."""
-    return dense_run(_settings(p), seed, int(p['periods']), int(p['robots']), float(p['jitter']),
-                     int(p['sample_every']))
+    return StudyDenseResult(**dense_run(_settings(p), seed, int(p['periods']), int(p['robots']),
+                                        float(p['jitter']), int(p['sample_every'])))
 
 
-def study_impact_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+def study_impact_trial(p: Mapping[str, Any], seed: int) -> StudyImpactResult:
     """Head-on impacts of two robot bodies at ``speed_m_s``, meeting at ``phases`` points spread over one step:
     the effective restitution (separation / approach speed) mean, sd, min, max and the deepest overlap (mm)."""
     from smarticle_sim.impact import impact_sweep, summary
@@ -479,8 +481,8 @@ def study_impact_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
     impacts = impact_sweep(config.physics, config.robot, float(p['speed_m_s']), int(p['phases']))
     figures = summary(impacts)
     overlap_mm = 1e3 * figures.pop('overlap_max')
-    return {**{k: round(v, 4) for k, v in figures.items()}, 'overlap_mm': round(overlap_mm, 3),
-            'restitution_by_phase': [round(i.restitution, 4) for i in impacts], 'trouble': ''}
+    return StudyImpactResult(**{k: round(v, 4) for k, v in figures.items()}, overlap_mm=round(overlap_mm, 3),
+                             restitution_by_phase=[round(i.restitution, 4) for i in impacts], trouble='')
 
 
 # ------------------------------------------------------------------ tables of the stored rows

@@ -206,10 +206,128 @@ class AccuracyResult(TrialResult):
     drift_um_per_cycle: float       # the lone robot's drift per gait cycle
 
 
-#: The typed result of each built-in kind (the pair kinds' inadmissible starts: ``InadmissiblePairResult``).
+# ------------------------------------------------------------------ the physics study's kinds (physics_study)
+# Their field names are the study's table columns of old (kept: the stored bytes stay the same); the
+# comments give the units.
+
+
+@dataclass(frozen=True)
+class StudyInadmissibleResult(TrialResult):
+    """A study pair start whose robots overlap (``study_collision``, ``study_pair``): not run."""
+
+    admissible: bool                # always False
+    why: str                        # the scene's refusal
+    trouble: str
+
+
+@dataclass(frozen=True)
+class StudyCollisionResult(TrialResult):
+    """``study_collision``: a pair's collisions with every contact impulse measured (``summarise_trace``)."""
+
+    admissible: bool                # always True
+    collisions: int                 # collision events (runs of contact steps, gaps of <= 3 steps merged)
+    r0: float                       # centre distance at the start (BL)
+    r_end: float                    # ... at the end (BL)
+    J_normal: float                 # robot-robot normal impulse along the pair axis, + = apart (N s)
+    J_friction: float               # robot-robot friction impulse along the axis (N s)
+    J_plate: float                  # body-plate friction impulse along the axis (N s)
+    dr_contact_BL: float            # change of r while in contact, summed over the collisions (BL)
+    dr_coast_BL: float              # change of r in the contact-free time after them (BL)
+    vsep_max: float                 # largest separation speed at a collision's end (m/s)
+    coast_ms_med: float             # median time until the bodies stop after a collision (ms)
+    touch_last10: bool              # any contact in the last 10 periods
+    depth_max_mm: float             # deepest robot-robot overlap (mm)
+    trouble: str
+
+
+@dataclass(frozen=True)
+class StudyDriftResult(TrialResult):
+    """``study_drift``: a lone robot's drift per cycle and tilt, tick by tick (``drift_run``)."""
+
+    heading: float                  # start heading (deg)
+    alpha: float                    # gait amplitude alpha_max (deg)
+    periods: int                    # periods measured (after the skipped ones)
+    net_um: float                   # net displacement per cycle (um)
+    step_um: float                  # mean displacement per cycle (um)
+    step_se_um: float               # its standard error (um)
+    dir_deg: float                  # direction of the net displacement (deg)
+    tilt_max_deg: float             # largest body tilt at a control tick (deg)
+    tilt_rms_deg: float             # rms body tilt (deg)
+    wall_per_sim_s: float           # wall-clock s per simulated s
+    trouble: str
+
+
+@dataclass(frozen=True)
+class StudyPairResult(TrialResult):
+    """``study_pair``: a pair's contact per period, its longest touching run, r, phi and travel (``pair_run``)."""
+
+    admissible: bool                # always True
+    theta0: float                   # start pair angles (deg)
+    phi0: float
+    p1: float                       # gait phases of the two robots (periods)
+    p2: float
+    periods: int                    # periods asked for
+    ran: int                        # periods run (fewer after trouble)
+    touch: int                      # periods with robot-robot contact
+    bound_run: int                  # longest run of touching periods (one-period gaps allowed)
+    bound_to_end: bool              # that run lasts to the end
+    touch_last10: bool              # any contact in the last 10 periods
+    r_end: float                    # r at the end (BL; NaN without a period)
+    r_mean_late: float              # mean r over the second half (BL)
+    phi_late: float                 # circular mean phi over the second half (deg)
+    travel_W: float                 # net travel of the pair's centre (W)
+    late_travel_W: float            # ... over the second half (W)
+    wall_per_sim_s: float           # wall-clock s per simulated s
+    trouble: str
+
+
+@dataclass(frozen=True)
+class StudyDenseResult(TrialResult):
+    """``study_dense``: dense stability and, for 7 robots, the gliders (``dense_run``)."""
+
+    seed: int
+    n: int                          # robots
+    jitter: float                   # gait phase offsets within +- jitter (periods)
+    periods: int
+    sim_s: float                    # simulated time reached (s)
+    wall_s: float                   # wall-clock time (s)
+    x_real_time: float              # sim_s / wall_s
+    deepest_mm: float               # deepest robot-robot overlap at the samples (mm)
+    trouble: str
+    #: For 7 robots that ran more than a period: gliders of >= 30 and >= 100 periods, isolated ones of >= 100.
+    gliders_30: int | None = None
+    gliders_100: int | None = None
+    isolated_100: int | None = None
+    best_dist_W: float | None = None   # longest travel of a glider of >= 100 periods (W)
+    c1_lives: str | None = None     # C1 glider lifetimes (periods), space-separated
+    c2_lives: str | None = None     # C2 glider lifetimes (periods), space-separated
+
+
+@dataclass(frozen=True)
+class StudyImpactResult(TrialResult):
+    """``study_impact``: effective restitution (separation / approach speed) of head-on impacts."""
+
+    mean: float                     # over the meeting phases (dimensionless)
+    sd: float
+    min: float
+    max: float
+    overlap_mm: float               # deepest overlap (mm)
+    restitution_by_phase: list[float]
+    trouble: str
+
+
+#: The typed result of each built-in kind (a start that did not run: ``INADMISSIBLE_TYPES``).
 RESULT_TYPES: dict[str, type[TrialResult]] = {
     'dense': DenseResult, 'pair': PairResult, 'pair_mujoco': PairResult, 'single': SingleResult,
     'single_mujoco': SingleResult, 'p6': P6Result, 'c2_harvest': C2HarvestResult, 'accuracy': AccuracyResult,
+    'study_collision': StudyCollisionResult, 'study_drift': StudyDriftResult, 'study_pair': StudyPairResult,
+    'study_dense': StudyDenseResult, 'study_impact': StudyImpactResult,
+}
+
+#: The result of a kind's start that did not run (robots overlapping), told by ``admissible: false``.
+INADMISSIBLE_TYPES: dict[type[TrialResult], type[TrialResult]] = {
+    PairResult: InadmissiblePairResult, StudyCollisionResult: StudyInadmissibleResult,
+    StudyPairResult: StudyInadmissibleResult,
 }
 
 
@@ -217,8 +335,8 @@ def read_result(kind: str, data: Mapping[str, Any]) -> TrialResult | dict[str, A
     """A stored result (the JSON record's ``result``) as its kind's typed record; a kind without a type
     (a user's ``module:function``) gives the dict back. Raises ResultError if the stored dict does not fit."""
     cls: type[TrialResult] | None = RESULT_TYPES.get(kind)
-    if cls is PairResult and data.get('admissible') is False:
-        cls = InadmissiblePairResult
+    if cls in INADMISSIBLE_TYPES and data.get('admissible') is False:
+        cls = INADMISSIBLE_TYPES[cls]
     if cls is None:
         return dict(data)
     try:
