@@ -9,7 +9,8 @@ import pytest
 
 from smarticle_experiments.errors import ResultError
 from smarticle_experiments.results import (RESULT_TYPES, DenseResult, GliderRecord, InadmissiblePairResult, P6Result,
-                                           PairResult, SingleResult, read_result)
+                                           PairResult, SingleResult, StudyDenseResult, StudyInadmissibleResult,
+                                           read_result)
 
 
 def test_optional_fields_are_stored_only_when_set_and_read_back() -> None:
@@ -53,6 +54,22 @@ STORED = {
     'c2_harvest': {'samples': [{'seed': 0, 'i': 0, 'j': 1, 'period': 5, 'r_bl': 1.5}], 'gliders': 1, 'trouble': ''},
     'accuracy': {'trouble': '', 'wall_per_sim_s': 0.2, 'xy1_bl': [[0.0, 0.1], [1.3, 0.0]], 'xy10_bl': None,
                  'r_mean_bl': 1.35, 'drift_um_per_cycle': 70.2},
+    'study_collision': {'admissible': True, 'collisions': 3, 'r0': 1.3, 'r_end': 1.41, 'J_normal': 0.021,
+                        'J_friction': 0, 'J_plate': -0.026, 'dr_contact_BL': 0.05, 'dr_coast_BL': 0.02,
+                        'vsep_max': 0.1, 'coast_ms_med': 11.4, 'touch_last10': True, 'depth_max_mm': 0.2,
+                        'trouble': ''},
+    'study_drift': {'heading': 90.0, 'alpha': 90.0, 'periods': 3, 'net_um': 142.5, 'step_um': 142.6,
+                    'step_se_um': 0.008, 'dir_deg': 171.5, 'tilt_max_deg': 0.4, 'tilt_rms_deg': 0.2,
+                    'wall_per_sim_s': 0.3, 'trouble': ''},
+    'study_pair': {'admissible': True, 'theta0': 330.0, 'phi0': 180.0, 'p1': 0.0, 'p2': 0.05, 'periods': 4, 'ran': 4,
+                   'touch': 3, 'bound_run': 3, 'bound_to_end': True, 'touch_last10': True, 'r_end': 1.3,
+                   'r_mean_late': 1.31, 'phi_late': 179.0, 'travel_W': 0.05, 'late_travel_W': 0.03,
+                   'wall_per_sim_s': 0.3, 'trouble': ''},
+    'study_dense': {'seed': 0, 'n': 7, 'jitter': 0.0, 'periods': 300, 'sim_s': 480.0, 'wall_s': 200.0,
+                    'x_real_time': 2.4, 'deepest_mm': 0.5, 'trouble': '', 'gliders_30': 4, 'gliders_100': 1,
+                    'isolated_100': 0, 'best_dist_W': 2.1, 'c1_lives': '120 40', 'c2_lives': '35 31'},
+    'study_impact': {'mean': 0.8618, 'sd': 0.0354, 'min': 0.8368, 'max': 0.8868, 'overlap_mm': 0.281,
+                     'restitution_by_phase': [0.8368, 0.8868], 'trouble': ''},
 }
 
 
@@ -61,7 +78,7 @@ def test_each_kinds_stored_result_reads_back_typed_and_writes_the_same_bytes(kin
     text = json.dumps(STORED[kind], sort_keys=True, separators=(',', ':'))
     typed = read_result(kind, json.loads(text))
     assert isinstance(typed, RESULT_TYPES[kind])
-    assert list(typed.as_dict()) == list(STORED[kind])            # the stored key order, key for key
+    assert list(typed.as_dict()) == list(STORED[kind])            # the kind's key order, key for key
     assert json.dumps(typed.as_dict(), sort_keys=True, separators=(',', ':')) == text
 
 
@@ -75,6 +92,16 @@ def test_gliders_read_back_as_records_with_the_stored_class_key() -> None:
     # a kind without a class rename stores exactly what dataclasses.asdict gives
     single = read_result('single', STORED['single'])
     assert dataclasses.asdict(single) == STORED['single']
+
+
+def test_a_dense_study_row_without_gliders_leaves_their_fields_out() -> None:
+    few = {k: v for k, v in STORED['study_dense'].items() if k in ('seed', 'n', 'jitter', 'periods', 'sim_s',
+                                                                     'wall_s', 'x_real_time', 'deepest_mm', 'trouble')}
+    typed = read_result('study_dense', few)
+    assert isinstance(typed, StudyDenseResult) and typed.gliders_30 is None and typed.as_dict() == few
+    refused = {'admissible': False, 'why': 'overlap', 'trouble': ''}
+    assert read_result('study_pair', refused) == read_result('study_collision', refused) == \
+        StudyInadmissibleResult(**refused)
 
 
 def test_an_inadmissible_pair_start_reads_as_its_own_type_and_a_misfit_is_refused() -> None:
