@@ -4,13 +4,15 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from pathlib import Path
+from typing import Any
 
 import pytest
 
 from smarticle_experiments.errors import ResultError
 from smarticle_experiments.results import (RESULT_TYPES, DenseResult, GliderRecord, InadmissiblePairResult, P6Result,
                                            PairResult, SingleResult, StudyDenseResult, StudyInadmissibleResult,
-                                           read_result)
+                                           StudyPairResult, read_result)
 
 
 def test_optional_fields_are_stored_only_when_set_and_read_back() -> None:
@@ -136,3 +138,34 @@ def test_a_report_section_reads_typed_records() -> None:
     assert '| all | 2 |' in table and '| isolated | 2 |' in table
     pair = read_result('pair', PAIR)
     assert isinstance(pair, PairResult) and basin_outcome(pair) == 'bound'
+
+
+def test_a_section_given_another_kinds_trials_names_the_trial(tmp_path: Path) -> None:
+    from smarticle_experiments.report import write_report
+    from smarticle_experiments.spec import spec_from_mapping
+    from smarticle_experiments.store import ResultStore
+
+    spec = spec_from_mapping({'name': 'mixed', 'kind': 'single', 'seeds': [0], 'report': ['p1']})
+    trials = spec.trials({})
+    store = ResultStore(tmp_path / 'mixed')
+    store.write({'key': trials[0].key, 'kind': 'single', 'seed': 0, 'point': {}, 'status': 'ok',
+                 'result': STORED['single']})
+    with pytest.raises(ResultError, match=f"section 'p1' reads DenseResult results; trial {trials[0].key}"):
+        write_report(spec, trials, store, {})
+
+
+def test_the_physics_study_tables_read_typed_rows() -> None:
+    from smarticle_experiments.physics_study import dense_lines, pair_table, study_row
+
+    def row(kind: str, result: dict, **params: object) -> Any:
+        return study_row({'kind': kind, 'seed': 0, 'status': 'ok', 'result': result,
+                          'params': {'label': 'shipped', 'settings': {}, **params}})
+
+    start = {'theta_deg': 330.0, 'phi_deg': 180.0, 'phase2': 0.05}
+    rows = [row('study_pair', STORED['study_pair'], **start),
+            row('study_pair', {'admissible': False, 'why': 'overlap', 'trouble': ''}, **start)]
+    assert isinstance(rows[0].result, StudyPairResult) and isinstance(rows[1].result, StudyInadmissibleResult)
+    table = pair_table(rows)
+    assert len(table) == 3 and '| shipped | 1/960 | 330, 180, 0.05 | 3 / 4 | 3 | 1.310 | 179 | 0.05 |' in table[2]
+    lines = dense_lines([row('study_dense', STORED['study_dense'])])
+    assert 'trials with a pair bound >= 100 periods 1; ' in lines[0] and 'best travel 2.10 W' in lines[0]
