@@ -13,8 +13,10 @@ _EXPORTS: dict[str, str] = {
     'KINDS': 'trials', 'run_kind': 'trials',
     'TrialResult': 'results', 'SingleResult': 'results', 'P6Result': 'results', 'C2HarvestResult': 'results',
     'DenseResult': 'results', 'PairResult': 'results', 'InadmissiblePairResult': 'results',
+    'GliderRecord': 'results', 'AccuracyResult': 'results', 'read_result': 'results',
     'main': 'cli',
     'ExperimentError': 'errors', 'SpecError': 'errors', 'SchedulerError': 'errors', 'StoreError': 'errors',
+    'ResultError': 'errors',
 }
 __all__ = sorted(_EXPORTS)
 

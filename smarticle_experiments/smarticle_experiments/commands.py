@@ -14,6 +14,7 @@ import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from smarticle_common.cli import seeds_argument
@@ -22,6 +23,9 @@ from .assignments import parse_assignments
 from .errors import ExperimentError, SpecError
 from .harness import positive_float, run_mapping
 from .store import DEFAULT_ROOT, ResultStore
+
+if TYPE_CHECKING:
+    from .physics_study import StudyRow
 
 
 @dataclass(frozen=True)
@@ -240,19 +244,14 @@ def _study_settings(args: argparse.Namespace) -> tuple[dict[str, object], str]:
     return _assignments(args.set), args.label or (' '.join(args.set) or 'shipped')
 
 
-def study_rows(store: ResultStore, keys: list[str] | None = None) -> list[dict[str, object]]:
-    """The stored rows of a physics-study store: each trial's parameters, seed, physics rate and result."""
-    from .physics_study import dt_inv
+def study_rows(store: ResultStore, keys: list[str] | None = None) -> list[StudyRow[Any]]:
+    """The stored rows of a physics-study store: each trial's parameters, seed, physics rate and typed result."""
+    from .physics_study import study_row
 
-    rows = []
-    for r in store.records(keys):
-        if r.get('status') == 'ok':
-            rows.append({**r['params'], 'seed': r['seed'], 'dt_inv': dt_inv(r['params'].get('settings') or {}),
-                         **r['result']})
-    return rows
+    return [study_row(r) for r in store.records(keys) if r.get('status') == 'ok']
 
 
-def study_table(name: str, rows: list[dict[str, object]]) -> str:
+def study_table(name: str, rows: list[StudyRow[Any]]) -> str:
     """The table of one physics-study experiment."""
     from . import physics_study as ps
 

@@ -17,3 +17,7 @@ class SchedulerError(ExperimentError, ConnectionError):
 
 class StoreError(ExperimentError, OSError):
     """The result store cannot be read or written."""
+
+
+class ResultError(ExperimentError, ValueError):
+    """A stored trial result that does not read back as its kind's typed record (``results.read_result``)."""

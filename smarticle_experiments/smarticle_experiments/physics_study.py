@@ -18,8 +18,8 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Mapping
-from dataclasses import fields
-from typing import Any
+from dataclasses import dataclass, fields
+from typing import Any, Generic, TypeVar
 
 import numpy as np
 from smarticle_common.facts import BODY_LENGTH, R_BIND_BL, RobotSpec
@@ -34,6 +34,8 @@ from smarticle_sim.settings import PhysicsConfig, SimConfig
 
 from .configs import make_config
 from .errors import SpecError
+from .results import (StudyCollisionResult, StudyDenseResult, StudyDriftResult, StudyImpactResult,
+                      StudyInadmissibleResult, StudyPairResult, TrialResult, read_result)
 
 #: Body length (m) of the robot the study measures (the small preset's): lengths in the rows are in BL.
 BL = BODY_LENGTH
@@ -434,7 +436,7 @@ def _settings(p: Mapping[str, Any]) -> dict[str, Any]:
     return dict(p.get('settings') or {})
 
 
-def study_collision_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+def study_collision_trial(p: Mapping[str, Any], seed: int) -> StudyCollisionResult | StudyInadmissibleResult:
     """A pair from (``r_bl``, ``theta_deg``, ``phi_deg``), both robots at gait phase ``phase``, stepped with every
     contact impulse measured: collisions, separating impulses (N s), dr in contact and coasting (BL), contact in
     the last 10 periods (``summarise_trace``); an overlapping start is ``admissible: false``."""
@@ -442,35 +444,35 @@ def study_collision_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
         trace = collide(_settings(p), float(p['theta_deg']), float(p['phi_deg']), (float(p['phase']),) * 2,
                         float(p['periods']), float(p['r_bl']))
     except SceneError as exc:
-        return {'admissible': False, 'why': str(exc), 'trouble': ''}
-    return {'admissible': True, **summarise_trace(trace, trace['period'])}
+        return StudyInadmissibleResult(admissible=False, why=str(exc), trouble='')
+    return StudyCollisionResult(admissible=True, **summarise_trace(trace, trace['period']))
 
 
-def study_drift_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+def study_drift_trial(p: Mapping[str, Any], seed: int) -> StudyDriftResult:
     """A lone robot at heading ``heading_deg``: net drift per cycle (um) after ``skip`` periods, its tilt."""
-    return drift_run(_settings(p), float(p['heading_deg']), int(p['periods']), int(p['skip']),
-                     float(p['alpha_max_deg']))
+    return StudyDriftResult(**drift_run(_settings(p), float(p['heading_deg']), int(p['periods']), int(p['skip']),
+                                        float(p['alpha_max_deg'])))
 
 
-def study_pair_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+def study_pair_trial(p: Mapping[str, Any], seed: int) -> StudyPairResult | StudyInadmissibleResult:
     """A pair from pair coordinates at phases (``phase1``, ``phase2``): contact per period, the longest touching
     run, r and phi late, travel (``pair_run``); an overlapping start is ``admissible: false``."""
     try:
         row = pair_run(_settings(p), float(p['theta_deg']), float(p['phi_deg']),
                        (float(p['phase1']), float(p['phase2'])), int(p['periods']), float(p['r_bl']))
     except SceneError as exc:
-        return {'admissible': False, 'why': str(exc), 'trouble': ''}
-    return {'admissible': True, **row}
+        return StudyInadmissibleResult(admissible=False, why=str(exc), trouble='')
+    return StudyPairResult(admissible=True, **row)
 
 
-def study_dense_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+def study_dense_trial(p: Mapping[str, Any], seed: int) -> StudyDenseResult:
     """``robots`` robots densely packed (seeded), phase offsets within +-``jitter``: trouble, deepest overlap and,
     for 7 robots, gliders of >= 30 and >= 100 periods, isolated ones, C1 / C2 lifetimes (``dense_run``)."""
-    return dense_run(_settings(p), seed, int(p['periods']), int(p['robots']), float(p['jitter']),
-                     int(p['sample_every']))
+    return StudyDenseResult(**dense_run(_settings(p), seed, int(p['periods']), int(p['robots']),
+                                        float(p['jitter']), int(p['sample_every'])))
 
 
-def study_impact_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+def study_impact_trial(p: Mapping[str, Any], seed: int) -> StudyImpactResult:
     """Head-on impacts of two robot bodies at ``speed_m_s``, meeting at ``phases`` points spread over one step:
     the effective restitution (separation / approach speed) mean, sd, min, max and the deepest overlap (mm)."""
     from smarticle_sim.impact import impact_sweep, summary
@@ -479,11 +481,40 @@ def study_impact_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
     impacts = impact_sweep(config.physics, config.robot, float(p['speed_m_s']), int(p['phases']))
     figures = summary(impacts)
     overlap_mm = 1e3 * figures.pop('overlap_max')
-    return {**{k: round(v, 4) for k, v in figures.items()}, 'overlap_mm': round(overlap_mm, 3),
-            'restitution_by_phase': [round(i.restitution, 4) for i in impacts], 'trouble': ''}
+    return StudyImpactResult(**{k: round(v, 4) for k, v in figures.items()}, overlap_mm=round(overlap_mm, 3),
+                             restitution_by_phase=[round(i.restitution, 4) for i in impacts], trouble='')
 
 
 # ------------------------------------------------------------------ tables of the stored rows
+
+R = TypeVar('R', bound=TrialResult)
+
+
+@dataclass(frozen=True)
+class StudyRow(Generic[R]):
+    """One stored physics-study trial: its parameters, seed, physics rate and typed result."""
+
+    params: Mapping[str, Any]       # the trial's merged parameters (``label``, ``settings``, the kind's own)
+    seed: int
+    dt_inv: int                     # physics rate (1 / time step, Hz)
+    result: R
+
+    @property
+    def label(self) -> str:
+        """The setting's name in the tables."""
+        return str(self.params['label'])
+
+
+def study_row(record: Mapping[str, Any]) -> StudyRow[Any]:
+    """The row of a stored physics-study record (``status: ok``): its result read back typed."""
+    params = record['params']
+    return StudyRow(params, int(record['seed']), dt_inv(params.get('settings') or {}),
+                    read_result(str(record['kind']), record['result']))
+
+
+def _admitted(rows: list[StudyRow[Any]], cls: type[R]) -> list[StudyRow[R]]:
+    """The rows whose start ran (a start whose robots overlapped is ``StudyInadmissibleResult``)."""
+    return [r for r in rows if isinstance(r.result, cls)]
 
 
 def dt_inv(settings: Mapping[str, Any]) -> int:
@@ -499,12 +530,12 @@ def _wilson_text(k: int, n: int) -> str:
     return f'{k}/{n} ({est.low:.2f}-{est.high:.2f})' if n else '0/0'
 
 
-def drift_table(rows: list[dict[str, Any]]) -> list[str]:
+def drift_table(rows: list[StudyRow[StudyDriftResult]]) -> list[str]:
     """Drift per cycle against the time step per (label, heading), its Richardson limit and the coarsest step
     within 10 % of it."""
     groups: dict[tuple[str, float], dict[int, float]] = {}
     for r in rows:
-        groups.setdefault((r['label'], float(r['heading_deg'])), {})[r['dt_inv']] = float(r['net_um'])
+        groups.setdefault((r.label, float(r.params['heading_deg'])), {})[r.dt_inv] = float(r.result.net_um)
     out = ['| setting | heading (deg) | drift per cycle (um) at dt = 1/240, 1/480, 1/960, 1/1920, 1/3840 s | '
            'Richardson limit | coarsest dt within 10 % |', '| --- | ---: | --- | ---: | --- |']
     for (label, heading), by in sorted(groups.items()):
@@ -515,91 +546,96 @@ def drift_table(rows: list[dict[str, Any]]) -> list[str]:
     return out
 
 
-def pair_table(rows: list[dict[str, Any]]) -> list[str]:
+def pair_table(rows: list[StudyRow[Any]]) -> list[str]:
     """One line per pair run: step, start, touching periods, longest touching run, r and phi late, travel."""
     out = ['| setting | dt | start (theta, phi, p2) | touching periods | longest touching run | r late (BL) | '
            'phi late | travel (W) |', '| --- | --- | --- | ---: | ---: | ---: | ---: | ---: |']
-    for r in rows:
-        if r.get('admissible'):
-            out.append(f"| {r['label']} | 1/{r['dt_inv']} | {r['theta_deg']:g}, {r['phi_deg']:g}, {r['phase2']:g} | "
-                       f"{r['touch']} / {r['ran']} | {r['bound_run']} | {r['r_mean_late']:.3f} | {r['phi_late']:.0f} | "
-                       f"{r['travel_W']:.2f} |")
+    for r in _admitted(rows, StudyPairResult):
+        p, res = r.params, r.result
+        out.append(f"| {r.label} | 1/{r.dt_inv} | {p['theta_deg']:g}, {p['phi_deg']:g}, {p['phase2']:g} | "
+                   f"{res.touch} / {res.ran} | {res.bound_run} | {res.r_mean_late:.3f} | {res.phi_late:.0f} | "
+                   f"{res.travel_W:.2f} |")
     return out
 
 
-def mechanism_table(rows: list[dict[str, Any]]) -> list[str]:
+def mechanism_table(rows: list[StudyRow[Any]]) -> list[str]:
     """Per setting: starts touching in the last 10 periods (Wilson), r at the end, the separating impulses."""
     out = ['| setting | starts | touching in the last 10 periods (95 % Wilson) | r_end mean +- se (BL) | '
            'r_end >= 1.6 BL | J normal | J friction (robot-robot) | J plate (mN s) | dr in contact / after (BL) | '
            'max v_sep (m/s) | max depth (mm) |',
            '| --- | ---: | --- | --- | ---: | ---: | ---: | ---: | --- | ---: | ---: |']
-    for label in dict.fromkeys(r['label'] for r in rows):
-        rs = [r for r in rows if r['label'] == label and r.get('admissible')]
+    ran = _admitted(rows, StudyCollisionResult)
+    for label in dict.fromkeys(r.label for r in rows):
+        rs = [r.result for r in ran if r.label == label]
         if not rs:
             continue
-        re = np.array([float(r['r_end']) for r in rs])
+        re = np.array([float(r.r_end) for r in rs])
         se = re.std(ddof=1) / math.sqrt(len(re)) if len(re) > 1 else math.nan
 
-        def m(key: str, rs: list[dict[str, Any]] = rs) -> float:
-            return float(np.mean([float(r[key]) for r in rs]))
-        out.append(f"| {label} | {len(rs)} | {_wilson_text(sum(bool(r['touch_last10']) for r in rs), len(rs))} | "
-                   f"{re.mean():.2f} +- {se:.2f} | {int((re >= R_BIND_BL).sum())} | {m('J_normal') * 1e3:.0f} | "
-                   f"{m('J_friction') * 1e3:.0f} | {m('J_plate') * 1e3:.0f} | {m('dr_contact_BL'):.2f} / "
-                   f"{m('dr_coast_BL'):.2f} | {max(float(r['vsep_max']) for r in rs):.2f} | "
-                   f"{max(float(r['depth_max_mm']) for r in rs):.1f} |")
+        def m(values: list[float]) -> float:
+            return float(np.mean([float(v) for v in values]))
+        out.append(f"| {label} | {len(rs)} | {_wilson_text(sum(bool(r.touch_last10) for r in rs), len(rs))} | "
+                   f"{re.mean():.2f} +- {se:.2f} | {int((re >= R_BIND_BL).sum())} | "
+                   f"{m([r.J_normal for r in rs]) * 1e3:.0f} | {m([r.J_friction for r in rs]) * 1e3:.0f} | "
+                   f"{m([r.J_plate for r in rs]) * 1e3:.0f} | {m([r.dr_contact_BL for r in rs]):.2f} / "
+                   f"{m([r.dr_coast_BL for r in rs]):.2f} | {max(float(r.vsep_max) for r in rs):.2f} | "
+                   f"{max(float(r.depth_max_mm) for r in rs):.1f} |")
     return out
 
 
-def basin_table(rows: list[dict[str, Any]]) -> list[str]:
+def basin_table(rows: list[StudyRow[Any]]) -> list[str]:
     """Per setting and phase: bound (contact in the last 10 periods) overall, by quadrant and normal orientation."""
     out = ['| setting | phase | admissible | bound (contact in last 10) | r_end < 2 BL | quadrants 1+4 | '
            'quadrants 2+3 | antiparallel (phi 135-225) | parallel (phi <= 45 or >= 315) |',
            '| --- | --- | ---: | --- | ---: | --- | --- | --- | --- |']
-    for label, phase in dict.fromkeys((r['label'], r['phase1']) for r in rows):
-        rs = [r for r in rows if (r['label'], r['phase1']) == (label, phase) and r.get('admissible')]
+    ran = _admitted(rows, StudyPairResult)
+    for label, phase in dict.fromkeys((r.label, r.params['phase1']) for r in rows):
+        rs = [r for r in ran if (r.label, r.params['phase1']) == (label, phase)]
 
-        def frac(sel: list[dict[str, Any]]) -> str:
-            return _wilson_text(sum(bool(r['touch_last10']) for r in sel), len(sel))
-        q14 = [r for r in rs if r['theta_deg'] < 90 or r['theta_deg'] >= 270]
-        q23 = [r for r in rs if 90 <= r['theta_deg'] < 270]
-        anti = [r for r in rs if abs(r['phi_deg'] - 180) <= 45]
-        par = [r for r in rs if min(r['phi_deg'], 360 - r['phi_deg']) <= 45]
-        out.append(f"| {label} | {phase:g} | {len(rs)} | {frac(rs)} | {sum(float(r['r_end']) < 2.0 for r in rs)} | "
-                   f"{frac(q14)} | {frac(q23)} | {frac(anti)} | {frac(par)} |")
+        def frac(sel: list[StudyRow[StudyPairResult]]) -> str:
+            return _wilson_text(sum(bool(r.result.touch_last10) for r in sel), len(sel))
+        q14 = [r for r in rs if r.params['theta_deg'] < 90 or r.params['theta_deg'] >= 270]
+        q23 = [r for r in rs if 90 <= r.params['theta_deg'] < 270]
+        anti = [r for r in rs if abs(r.params['phi_deg'] - 180) <= 45]
+        par = [r for r in rs if min(r.params['phi_deg'], 360 - r.params['phi_deg']) <= 45]
+        out.append(f"| {label} | {phase:g} | {len(rs)} | {frac(rs)} | "
+                   f"{sum(float(r.result.r_end) < 2.0 for r in rs)} | {frac(q14)} | {frac(q23)} | {frac(anti)} | "
+                   f"{frac(par)} |")
     return out
 
 
-def dense_lines(rows: list[dict[str, Any]]) -> list[str]:
+def dense_lines(rows: list[StudyRow[StudyDenseResult]]) -> list[str]:
     """Per setting and jitter: trouble stops (Wilson), deepest overlap, speed and, for 7 robots, the gliders."""
     out = []
-    for label, jitter in sorted({(r['label'], float(r['jitter'])) for r in rows}):
-        rs = [r for r in rows if (r['label'], float(r['jitter'])) == (label, jitter)]
+    for label, jitter in sorted({(r.label, float(r.result.jitter)) for r in rows}):
+        rs = [r.result for r in rows if (r.label, float(r.result.jitter)) == (label, jitter)]
         line = (f"{label}, jitter {jitter:g}: {len(rs)} trials, trouble stops "
-                f"{_wilson_text(sum(bool(r['trouble']) for r in rs), len(rs))}, deepest overlap max "
-                f"{max(float(r['deepest_mm']) for r in rs):.2f} mm, x real time "
-                f"{np.mean([float(r['x_real_time']) for r in rs]):.1f}")
-        if all('isolated_100' in r for r in rs):
-            c1 = [int(x) for r in rs for x in str(r['c1_lives']).split()]
-            c2 = [int(x) for r in rs for x in str(r['c2_lives']).split()]
-            line += (f"; trials with a pair bound >= 100 periods {sum(int(r['gliders_100']) > 0 for r in rs)}; "
-                     f"with an isolated one {_wilson_text(sum(int(r['isolated_100']) > 0 for r in rs), len(rs))}; "
+                f"{_wilson_text(sum(bool(r.trouble) for r in rs), len(rs))}, deepest overlap max "
+                f"{max(float(r.deepest_mm) for r in rs):.2f} mm, x real time "
+                f"{np.mean([float(r.x_real_time) for r in rs]):.1f}")
+        if all(r.isolated_100 is not None for r in rs):
+            c1 = [int(x) for r in rs for x in str(r.c1_lives).split()]
+            c2 = [int(x) for r in rs for x in str(r.c2_lives).split()]
+            line += (f"; trials with a pair bound >= 100 periods {sum(int(r.gliders_100 or 0) > 0 for r in rs)}; "
+                     f"with an isolated one {_wilson_text(sum(int(r.isolated_100 or 0) > 0 for r in rs), len(rs))}; "
                      f"C1 gliders {len(c1)} median life {np.median(c1) if c1 else math.nan:.0f}; "
                      f"C2 {len(c2)} median {np.median(c2) if c2 else math.nan:.0f}; best travel "
-                     f"{max(float(r['best_dist_W']) for r in rs):.2f} W")
+                     f"{max(float(r.best_dist_W or 0.0) for r in rs):.2f} W")
         out.append(line)
-        out += [f"   seed {r['seed']}: {r['trouble']}" for r in rs if r['trouble']]
+        out += [f"   seed {r.seed}: {r.trouble}" for r in rs if r.trouble]
     return out
 
 
-def impact_table(rows: list[dict[str, Any]]) -> list[str]:
+def impact_table(rows: list[StudyRow[StudyImpactResult]]) -> list[str]:
     """Effective restitution of head-on impacts per contact ERP, restitution set, step and speed."""
     out = ['| setting | contact ERP | restitution set | step | speed (m/s) | effective: mean | sd | min | max | '
            'overlap (mm) |', '| --- | ---: | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: |']
     for r in rows:
-        config = study_config(r['settings'])[0]
-        out.append(f"| {r['label']} | {config.physics.contact_erp:g} | {config.physics.restitution:g} | "
-                   f"1/{r['dt_inv']} s | {r['speed_m_s']:g} | {r['mean']:.3f} | {r['sd']:.3f} | {r['min']:.3f} | "
-                   f"{r['max']:.3f} | {r['overlap_mm']:.2f} |")
+        config = study_config(r.params['settings'])[0]
+        res = r.result
+        out.append(f"| {r.label} | {config.physics.contact_erp:g} | {config.physics.restitution:g} | "
+                   f"1/{r.dt_inv} s | {r.params['speed_m_s']:g} | {res.mean:.3f} | {res.sd:.3f} | {res.min:.3f} | "
+                   f"{res.max:.3f} | {res.overlap_mm:.2f} |")
     return out
 
 

@@ -24,17 +24,22 @@ from collections import defaultdict
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 from smarticle_sim.mujoco_engine import MujocoSettings
 from smarticle_sim.settings import BULLET_SOLVER_RESIDUAL_THRESHOLD
 
-from .results import P6Result, SingleResult
+from .errors import ResultError
+from .results import (AccuracyResult, DenseResult, GliderRecord, InadmissiblePairResult, P6Result,
+                      PairResult, SingleResult, TrialResult, read_result)
 from .spec import ExperimentSpec, Trial, canonical, seed_runs
 from .stats import Estimate, bootstrap_mean, kaplan_meier, logrank, wilson
 from .store import ResultStore, json_ready, write_atomic
 from .trials import MUJOCO_KINDS, config_of, ensemble_msd, msd_beta
+
+
+T = TypeVar('T')
 
 
 @dataclass
@@ -68,14 +73,36 @@ class Context:
     figures: list[Path] = field(default_factory=list)
     comparisons: list[Comparison] = field(default_factory=list)
 
-    def ok(self) -> list[tuple[Trial, dict[str, Any]]]:
-        """Finished trials that did not end in trouble, with their results."""
+    def ok(self) -> list[tuple[Trial, TrialResult | dict[str, Any]]]:
+        """Finished trials that did not end in trouble, with their typed results (``results.read_result``)."""
         out = []
         for t in self.trials:
             rec = self.records.get(t.key)
             if rec and rec.get('status') == 'ok' and not (rec.get('result') or {}).get('trouble'):
-                out.append((t, rec['result']))
+                out.append((t, read_result(t.kind, rec['result'])))
         return out
+
+    def _ok_of(self, section: str, types: tuple[type, ...]) -> list[tuple[Trial, Any]]:
+        """``ok()`` for a section that reads results of ``types``; ResultError names a trial of another kind."""
+        out = []
+        for t, r in self.ok():
+            if not isinstance(r, types):
+                raise ResultError(f'report section {section!r} reads {" or ".join(c.__name__ for c in types)} '
+                                  f'results; trial {t.key} (kind {t.kind}) gives {type(r).__name__}')
+            out.append((t, r))
+        return out
+
+    def ok_as(self, section: str, cls: type[T]) -> list[tuple[Trial, T]]:
+        """``ok()`` for a section that reads results of one type ``cls``."""
+        return self._ok_of(section, (cls,))
+
+    def ok_gliders(self, section: str) -> list[tuple[Trial, DenseResult | InadmissiblePairResult]]:
+        """``ok()`` for a section that reads gliders: dense and pair trials, inadmissible pair starts included."""
+        return self._ok_of(section, (DenseResult, InadmissiblePairResult))
+
+    def ok_pairs(self, section: str) -> list[tuple[Trial, PairResult | InadmissiblePairResult]]:
+        """``ok()`` for a section that reads pair trials, inadmissible starts included."""
+        return self._ok_of(section, (PairResult, InadmissiblePairResult))
 
     def seeds_text(self, pairs: Sequence[tuple[Trial, Any]]) -> str:
         """The seeds of some trials, compactly."""
@@ -111,9 +138,19 @@ def _paper(ctx: Context, name: str, default: Any = None) -> Any:
     return ctx.spec.paper.get(name, default)
 
 
-def _gliders(pairs: Sequence[tuple[Trial, dict[str, Any]]]) -> list[dict[str, Any]]:
+def _gliders(pairs: Sequence[tuple[Trial, DenseResult]]) -> list[GliderRecord]:
     """Every glider of the given trials."""
-    return [g for _, res in pairs for g in res.get('gliders') or []]
+    return [g for _, res in pairs for g in res.gliders]
+
+
+def _num(value: float | None) -> float:
+    """A stored number, NaN for None (JSON's NaN)."""
+    return math.nan if value is None else float(value)
+
+
+def _longest(res: DenseResult | InadmissiblePairResult) -> GliderRecord | None:
+    """A trial's longest glider (the first of equal lifetimes), or None."""
+    return max(res.gliders, key=lambda g: g.lifetime_periods, default=None)
 
 
 # ------------------------------------------------------------------ sections
@@ -121,16 +158,16 @@ def _gliders(pairs: Sequence[tuple[Trial, dict[str, Any]]]) -> list[dict[str, An
 
 def section_p1(ctx: Context) -> list[str]:
     """P1: trials with a pair bound >= positive_periods, the isolated variant, and their travel."""
-    pairs = ctx.ok()
+    pairs = ctx.ok_as('p1', DenseResult)
     n = len(pairs)
-    positive = sum(bool(r['positive']) for _, r in pairs)
-    isolated = sum(bool(r['positive_isolated']) for _, r in pairs)
+    positive = sum(bool(r.positive) for _, r in pairs)
+    isolated = sum(bool(r.positive_isolated) for _, r in pairs)
     limit = ctx.spec.base.get('positive_periods', 100)
     iso_w = ctx.spec.base.get('isolation_w', 2.0)
     frac, frac_iso = wilson(positive, n), wilson(isolated, n)
-    distances = [max((g for g in r['gliders'] if g['lifetime_periods'] >= limit),
-                     key=lambda g: g['lifetime_periods'])['distance_w'] for _, r in pairs if r['positive']]
-    dist = bootstrap_mean(distances)
+    distances = [max((g for g in r.gliders if g.lifetime_periods >= limit),
+                     key=lambda g: g.lifetime_periods).distance_w for _, r in pairs if r.positive]
+    dist = bootstrap_mean([_num(d) for d in distances])
     p_frac, p_dist = _paper(ctx, 'fraction_bound', 0.64), _paper(ctx, 'distance_w', 2.9)
     ctx.comparisons += [
         Comparison(f'P1 trials with an isolated pair bound >= {limit} periods (no third robot within {iso_w:g} W '
@@ -143,7 +180,7 @@ def section_p1(ctx: Context) -> list[str]:
     ]
     fig = figure(6, 4)
     ax = fig.add_subplot(1, 1, 1)
-    ax.scatter([r['longest_periods'] for _, r in pairs], [r['longest_distance_w'] or 0.0 for _, r in pairs], s=12)
+    ax.scatter([r.longest_periods for _, r in pairs], [r.longest_distance_w or 0.0 for _, r in pairs], s=12)
     ax.axvline(limit, color='k', ls=':', lw=0.8)
     ax.set_xlabel('longest glider lifetime (periods)')
     ax.set_ylabel('its distance travelled (W)')
@@ -161,15 +198,15 @@ def section_p1(ctx: Context) -> list[str]:
 TRAVELLING_W_PER_100 = 2.0
 
 
-def long_gliders_table(pairs: Sequence[tuple[Trial, dict[str, Any]]], limit: int) -> list[str]:
+def long_gliders_table(pairs: Sequence[tuple[Trial, DenseResult]], limit: int) -> list[str]:
     """What the gliders bound >= ``limit`` periods are: by class and by isolation, their mean r and their net
     travel per 100 periods (median and quartiles), and how many travel >= ``TRAVELLING_W_PER_100``."""
-    long = [g for _, r in pairs for g in r.get('gliders', []) if g['lifetime_periods'] >= limit]
+    long = [g for _, r in pairs for g in r.gliders if g.lifetime_periods >= limit]
     if not long:
         return []
-    groups = [('all', long)] + [(c, [g for g in long if g['class'] == c]) for c in ('C1', 'C2', 'unclassified')]
-    groups += [('isolated', [g for g in long if g.get('isolated')]),
-               ('in a group', [g for g in long if not g.get('isolated')])]
+    groups = [('all', long)] + [(c, [g for g in long if g.glider_class == c]) for c in ('C1', 'C2', 'unclassified')]
+    groups += [('isolated', [g for g in long if g.isolated]),
+               ('in a group', [g for g in long if not g.isolated])]
 
     def quartiles(values: list[float]) -> str:
         q1, q2, q3 = np.percentile(values, [25, 50, 75])
@@ -182,9 +219,9 @@ def long_gliders_table(pairs: Sequence[tuple[Trial, dict[str, Any]]], limit: int
     for name, gs in groups:
         if not gs:
             continue
-        travel = [100.0 * g['distance_w'] / g['lifetime_periods'] for g in gs]
+        travel = [100.0 * _num(g.distance_w) / g.lifetime_periods for g in gs]
         fast = sum(t >= TRAVELLING_W_PER_100 for t in travel)
-        lines.append(f'| {name} | {len(gs)} | {quartiles([g["r_bl"] for g in gs])} | {quartiles(travel)} | {fast} |')
+        lines.append(f'| {name} | {len(gs)} | {quartiles([_num(g.r_bl) for g in gs])} | {quartiles(travel)} | {fast} |')
     return [*lines, '']
 
 
@@ -200,14 +237,14 @@ def end_groups(xy: np.ndarray, reach: float) -> tuple[int, ...]:
     return tuple(sorted(np.bincount(labels).tolist(), reverse=True))
 
 
-def end_groups_table(pairs: Sequence[tuple[Trial, dict[str, Any]]], reach_w: float) -> list[str]:
+def end_groups_table(pairs: Sequence[tuple[Trial, DenseResult]], reach_w: float) -> list[str]:
     """How the collective ends: the groups of robots within ``reach_w`` W (= BL) of each other in the last
     recorded frame of every trial that ran to its end, e.g. 6+1 or 4+2+1."""
     counts: dict[tuple[int, ...], int] = defaultdict(int)
     largest, whole = [], 0
     for t, r in pairs:
-        traj = r.get('trajectory_bl')
-        if not traj or float(r.get('periods_run', 0.0)) < float(t.params.get('periods', 0.0)):
+        traj = r.trajectory_bl
+        if not traj or float(r.periods_run) < float(t.params.get('periods', 0.0)):
             continue
         last = np.array([[math.nan if v is None else v for v in p] for p in traj[-1]], dtype=float)
         sizes = end_groups(last, reach_w)
@@ -228,16 +265,16 @@ def end_groups_table(pairs: Sequence[tuple[Trial, dict[str, Any]]], reach_w: flo
 
 def section_trajectories(ctx: Context) -> list[str]:
     """Fig. 1c: body-centre trajectories of one trial (the first positive one, else the first)."""
-    pairs = [(t, r) for t, r in ctx.ok() if r.get('trajectory_bl')]
+    pairs = [(t, r) for t, r in ctx.ok_as('trajectories', DenseResult) if r.trajectory_bl]
     if not pairs:
         return ['No trajectory recorded.']
-    trial, res = next(((t, r) for t, r in pairs if r.get('positive')), pairs[0])
-    xy = np.array([[[math.nan if v is None else v for v in p] for p in row] for row in res['trajectory_bl']])
+    trial, res = next(((t, r) for t, r in pairs if r.positive), pairs[0])
+    xy = np.array([[[math.nan if v is None else v for v in p] for p in row] for row in res.trajectory_bl])
     fig = figure(6, 6)
     ax = fig.add_subplot(1, 1, 1)
-    longest = max(res.get('gliders') or [], key=lambda g: g['lifetime_periods'], default=None)
+    longest = _longest(res)
     for k in range(xy.shape[1]):
-        bold = longest is not None and k in (longest['i'], longest['j'])
+        bold = longest is not None and k in (longest.i, longest.j)
         line, = ax.plot(xy[:, k, 0], xy[:, k, 1], lw=1.6 if bold else 0.7, label=f'{k}')
         ax.plot(xy[0, k, 0], xy[0, k, 1], 'o', color=line.get_color(), ms=4)
     ax.set_aspect('equal')
@@ -251,10 +288,10 @@ def section_trajectories(ctx: Context) -> list[str]:
 
 def section_configurations(ctx: Context) -> list[str]:
     """Fig. 3c / P2: r and phi histograms of the gliders; C1 and C2 shares."""
-    pairs = ctx.ok()
-    gl = [g for g in _gliders(pairs) if g['r_bl'] is not None and g['phi_deg'] is not None]
+    pairs = ctx.ok_as('configurations', DenseResult)
+    gl = [g for g in _gliders(pairs) if g.r_bl is not None and g.phi_deg is not None]
     n = len(gl)
-    c1, c2 = sum(g['class'] == 'C1' for g in gl), sum(g['class'] == 'C2' for g in gl)
+    c1, c2 = sum(g.glider_class == 'C1' for g in gl), sum(g.glider_class == 'C2' for g in gl)
     e1, e2 = wilson(c1, n), wilson(c2, n)
     both = n > 0 and e1.low > 0 and e2.low > 0
     ctx.comparisons += [
@@ -268,9 +305,9 @@ def section_configurations(ctx: Context) -> list[str]:
     fig = figure(10, 4)
     ax1, ax2 = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
     for cls, colour in (('C1', 'tab:red'), ('C2', 'tab:blue'), ('unclassified', 'tab:gray')):
-        sel = [g for g in gl if g['class'] == cls]
-        ax1.hist([g['r_bl'] for g in sel], bins=np.linspace(0.8, 2.0, 25), alpha=0.6, color=colour, label=cls)
-        ax2.hist([g['phi_deg'] for g in sel], bins=np.linspace(0, 360, 37), alpha=0.6, color=colour, label=cls)
+        sel = [g for g in gl if g.glider_class == cls]
+        ax1.hist([g.r_bl for g in sel], bins=np.linspace(0.8, 2.0, 25), alpha=0.6, color=colour, label=cls)
+        ax2.hist([g.phi_deg for g in sel], bins=np.linspace(0, 360, 37), alpha=0.6, color=colour, label=cls)
     ax1.set_xlabel('r (BL)')
     ax2.set_xlabel('phi (deg)')
     for ax in (ax1, ax2):
@@ -283,7 +320,7 @@ def section_configurations(ctx: Context) -> list[str]:
 
 def section_lifetimes(ctx: Context) -> list[str]:
     """P3: lifetime against phi, semi-log lifetime histogram, Kaplan-Meier per class."""
-    pairs = ctx.ok()
+    pairs = ctx.ok_as('lifetimes', DenseResult)
     gl = _gliders(pairs)
     periods = float(ctx.spec.base.get('periods', 300))
     lines = ['| class | gliders | still bound at the end | KM median lifetime (periods) [95 %] |',
@@ -291,16 +328,16 @@ def section_lifetimes(ctx: Context) -> list[str]:
     fig = figure(12, 4)
     ax1, ax2, ax3 = (fig.add_subplot(1, 3, k) for k in (1, 2, 3))
     for cls, colour in (('C1', 'tab:red'), ('C2', 'tab:blue'), ('unclassified', 'tab:gray')):
-        sel = [g for g in gl if g['class'] == cls]
+        sel = [g for g in gl if g.glider_class == cls]
         if not sel:
             lines.append(f'| {cls} | 0 | - | - |')
             continue
-        life = [g['lifetime_periods'] for g in sel]
-        cens = [bool(g['ongoing']) for g in sel]
+        life = [g.lifetime_periods for g in sel]
+        cens = [bool(g.ongoing) for g in sel]
         km = kaplan_meier(life, cens)
         end = wilson(sum(cens), len(sel))
         lines.append(f'| {cls} | {len(sel)} | {end.text(".0%", 1)} | {km.median.text(".0f")} |')
-        ax1.scatter([g['phi_deg'] for g in sel], life, s=10, color=colour, label=cls)
+        ax1.scatter([g.phi_deg for g in sel], life, s=10, color=colour, label=cls)
         ax2.hist(life, bins=np.linspace(0, periods, 31), alpha=0.6, color=colour, label=cls)
         ax3.step(np.r_[0, km.times], np.r_[1, km.survival], where='post', color=colour, label=cls)
         ax3.fill_between(np.r_[0, km.times], np.r_[1, km.low], np.r_[1, km.high], step='post', color=colour,
@@ -345,26 +382,22 @@ BASIN_CLASSES: tuple[tuple[str, Callable[[float, float], bool]], ...] = (
 )
 
 
-def basin_outcome(r: Mapping[str, Any]) -> str:
+def basin_outcome(r: PairResult | InadmissiblePairResult) -> str:
     """A P4 start's outcome by the issue's rule: 'bound' if the pair is in contact in each of the last
     ``bound_tail`` periods (it keeps colliding to the end), 'repelled' if its centres end farther apart than
-    twice the robot's reach (no shape can touch), 'neither' otherwise, or 'inadmissible'. A record from before
-    the contact rule (no ``colliding_at_end``) falls back to the earlier rule: bound = r < r_bind or contact in
-    each of the last periods, every other start 'repelled'."""
-    if not r.get('admissible'):
+    twice the robot's reach (no shape can touch), 'neither' otherwise, or 'inadmissible'."""
+    if isinstance(r, InadmissiblePairResult) or not r.admissible:
         return 'inadmissible'
-    if r.get('colliding_at_end') is None:
-        return 'bound' if r.get('bound_at_end') else 'repelled'
-    if r.get('colliding_at_end'):
+    if r.colliding_at_end:
         return 'bound'
-    return 'repelled' if r.get('out_of_reach_at_end') else 'neither'
+    return 'repelled' if r.out_of_reach_at_end else 'neither'
 
 
 def section_basin(ctx: Context) -> list[str]:
     """Fig. 4a / P4: each start's outcome (bound, repelled, neither) over the (theta, phi) grid per phase of
     robot 2, and the bound share of each class of starts."""
-    rows = [(t, r) for t, r in ctx.ok()]
-    adm = [(t, r) for t, r in rows if r.get('admissible')]
+    rows = ctx.ok_pairs('basin')
+    adm = [(t, r) for t, r in rows if isinstance(r, PairResult) and r.admissible]
     phases = sorted({float(t.params['phase2']) for t, _ in rows})
     tail = ctx.spec.base.get('bound_tail')
     legend_text = 'pink bound, blue repelled, grey neither, black inadmissible'
@@ -392,7 +425,7 @@ def section_basin(ctx: Context) -> list[str]:
     judged = [(t, basin_outcome(r)) for t, r in adm]
     bound = [(t, r) for (t, r), (_, outcome) in zip(adm, judged, strict=True) if outcome == 'bound']
     counts = {name: sum(outcome == name for _, outcome in judged) for name in ('bound', 'repelled', 'neither')}
-    earlier = sum(bool(r.get('bound_at_end')) for _, r in adm)
+    earlier = sum(bool(r.bound_at_end) for _, r in adm)
 
     def angles(t: Trial) -> tuple[float, float]:
         return float(t.params['theta_deg']) % 360.0, float(t.params['phi_deg']) % 360.0
@@ -436,10 +469,10 @@ def section_basin(ctx: Context) -> list[str]:
 
 def section_alpha_sweep(ctx: Context) -> list[str]:
     """Fig. 6 / P5: ensemble MSD, beta, V_com and r of bound pairs against alpha_max."""
-    by_alpha: dict[float, list[dict[str, Any]]] = defaultdict(list)
-    pairs = ctx.ok()
+    by_alpha: dict[float, list[GliderRecord]] = defaultdict(list)
+    pairs = ctx.ok_gliders('alpha_sweep')
     for t, r in pairs:
-        longest = max(r.get('gliders') or [], key=lambda g: g['lifetime_periods'], default=None)
+        longest = _longest(r)
         if longest is not None:
             by_alpha[float(t.params['alpha_max_deg'])].append(longest)
     alphas = sorted({float(t.params['alpha_max_deg']) for t, _ in pairs})
@@ -454,14 +487,14 @@ def section_alpha_sweep(ctx: Context) -> list[str]:
         total_trials[float(t.params['alpha_max_deg'])] += 1
     for alpha in alphas:
         gl = by_alpha.get(alpha, [])
-        lags, values = ensemble_msd([g['com_path_w'] for g in gl])
+        lags, values = ensemble_msd([g.com_path_w for g in gl])
         beta_ens = msd_beta(lags, values)
         if lags.size:
             axm.loglog(lags, values, 'o-', ms=3, label=f'{alpha:g} deg')
-        beta = bootstrap_mean([g['beta'] for g in gl if g['beta'] is not None])
-        v = bootstrap_mean([g['v_com_w_per_period'] for g in gl if g['v_com_w_per_period'] is not None])
-        r_est = bootstrap_mean([g['r_bl'] for g in gl if g['r_bl'] is not None])
-        c2 = wilson(sum(g['class'] == 'C2' for g in gl), len(gl))
+        beta = bootstrap_mean([g.beta for g in gl if g.beta is not None])
+        v = bootstrap_mean([g.v_com_w_per_period for g in gl if g.v_com_w_per_period is not None])
+        r_est = bootstrap_mean([g.r_bl for g in gl if g.r_bl is not None])
+        c2 = wilson(sum(g.glider_class == 'C2' for g in gl), len(gl))
         for name, est in (('beta', beta), ('v', v), ('r', r_est)):
             table[name].append((alpha, est))
         lines.append(f'| {alpha:g} | {len(gl)}/{total_trials[alpha]} | {beta_ens:.2f} | {beta.text(".2f")} | '
@@ -523,9 +556,9 @@ def section_step_convergence(ctx: Context) -> list[str]:
     # MuJoCo's trials (``MUJOCO_KINDS``) have their own step and no Bullet solver: iterations and threshold 0
     solver_keys = ('physics.time_step', 'physics.solver_iterations', 'physics.solver_residual_threshold',
                    'mujoco.time_step')
-    by_setting: dict[tuple[Variant, Setting], list[dict[str, Any]]] = defaultdict(list)
+    by_setting: dict[tuple[Variant, Setting], list[GliderRecord]] = defaultdict(list)
     trials_at: dict[tuple[Variant, Setting], int] = defaultdict(int)
-    for t, r in ctx.ok():
+    for t, r in ctx.ok_gliders('step_convergence'):
         if t.kind in MUJOCO_KINDS:
             setting: Setting = (MujocoSettings(**dict(t.params.get('mujoco') or {})).time_step, 0, 0.0)
         else:
@@ -537,7 +570,7 @@ def section_step_convergence(ctx: Context) -> list[str]:
         variant = other_grid_values(t.point, solver_keys)
         key = (variant, setting)
         trials_at[key] += 1
-        longest = max(r.get('gliders') or [], key=lambda g: g['lifetime_periods'], default=None)
+        longest = _longest(r)
         if longest is not None:
             by_setting[key].append(longest)
     if not trials_at:
@@ -547,9 +580,9 @@ def section_step_convergence(ctx: Context) -> list[str]:
     figures: dict[str, dict[tuple[Variant, Setting], Estimate]] = {'r': {}, 'travel': {}}
     for key in trials_at:
         gl = by_setting.get(key, [])
-        figures['r'][key] = bootstrap_mean([g['r_bl'] for g in gl if g['r_bl'] is not None])
-        figures['travel'][key] = bootstrap_mean([100.0 * g['v_com_w_per_period'] for g in gl
-                                                 if g['v_com_w_per_period'] is not None])
+        figures['r'][key] = bootstrap_mean([g.r_bl for g in gl if g.r_bl is not None])
+        figures['travel'][key] = bootstrap_mean([100.0 * g.v_com_w_per_period for g in gl
+                                                 if g.v_com_w_per_period is not None])
 
     def off(name: str, key: tuple[Variant, Setting], finest: tuple[Variant, Setting]) -> tuple[str, bool | None]:
         est, ref = figures[name][key], figures[name][finest]
@@ -612,9 +645,9 @@ def section_p6(ctx: Context) -> list[str]:
     """
     Key = tuple[tuple[tuple[str, Any], ...], float, bool]
     groups: dict[Key, list[P6Result]] = defaultdict(list)
-    for t, r in ctx.ok():
+    for t, r in ctx.ok_as('p6', P6Result):
         setting = other_grid_values(t.point, ('alpha_max_deg', 'feedback'))
-        groups[(setting, float(t.params['alpha_max_deg']), bool(t.params['feedback']))].append(P6Result.from_dict(r))
+        groups[(setting, float(t.params['alpha_max_deg']), bool(t.params['feedback']))].append(r)
     keys = sorted({k for setting, _, _ in groups for k, _ in setting})
     lines = ['| ' + ''.join(f'{k} | ' for k in keys) + 'condition | trials | reached the end | KM median lifetime '
              '(periods) [95 %] | mean lifetime +- SE | mean halts |',
@@ -701,9 +734,9 @@ def section_drift(ctx: Context) -> list[str]:
     amplitude and one curve per setting in ``drift.png`` (drift against amplitude, 95 % bars).
     """
     groups: dict[tuple[tuple[str, Any], ...], dict[float, list[float]]] = defaultdict(lambda: defaultdict(list))
-    for t, r in ctx.ok():
+    for t, r in ctx.ok_as('drift', SingleResult):
         setting = other_grid_values(t.point, ('alpha_max_deg',))
-        groups[setting][float(t.params['alpha_max_deg'])].append(SingleResult.from_dict(r).drift_um_per_cycle)
+        groups[setting][float(t.params['alpha_max_deg'])].append(r.drift_um_per_cycle)
     target = _paper(ctx, 'drift_um', 75.0)
     keys = sorted({k for setting in groups for k, _ in setting})
     lines = ['| ' + ''.join(f'{k} | ' for k in keys) + 'alpha_max (deg) | robots | drift (um / cycle) [95 %] |',
@@ -741,7 +774,7 @@ def section_drift(ctx: Context) -> list[str]:
 
 def section_accuracy(ctx: Context) -> list[str]:
     """Run time against error: each setting against the sweep's finest (highest rate, most iterations)."""
-    rows = [(t, r) for t, r in ctx.ok()]
+    rows = ctx.ok_as('accuracy', AccuracyResult)
     if not rows:
         return ['No finished settings.']
     ref_t, ref = max(rows, key=lambda x: (float(x[0].params['rate_hz']), int(x[0].params['solver_iterations'])))
@@ -750,14 +783,14 @@ def section_accuracy(ctx: Context) -> list[str]:
     pts = []
     for t, r in rows:
         pos = math.nan
-        if r.get('xy10_bl') and ref.get('xy10_bl') and t.seed == ref_t.seed:
-            pos = float(np.linalg.norm(np.array(r['xy10_bl']) - np.array(ref['xy10_bl']), axis=1).mean())
-        r_err = abs(r['r_mean_bl'] - ref['r_mean_bl'])
-        d_err = abs(r['drift_um_per_cycle'] - ref['drift_um_per_cycle']) / ref['drift_um_per_cycle'] \
-            if ref['drift_um_per_cycle'] else math.nan
+        if r.xy10_bl and ref.xy10_bl and t.seed == ref_t.seed:
+            pos = float(np.linalg.norm(np.array(r.xy10_bl) - np.array(ref.xy10_bl), axis=1).mean())
+        r_err = abs(r.r_mean_bl - ref.r_mean_bl)
+        d_err = abs(r.drift_um_per_cycle - ref.drift_um_per_cycle) / ref.drift_um_per_cycle \
+            if ref.drift_um_per_cycle else math.nan
         out.append(f'| {t.params["rate_hz"]:g} | {t.params["solver_iterations"]} | {t.seed} | '
-                   f'{r["wall_per_sim_s"]:.4f} | {pos:.4f} | {r_err:.4f} | {d_err:.1%} |')
-        pts.append((int(t.params['solver_iterations']), r['wall_per_sim_s'], pos))
+                   f'{r.wall_per_sim_s:.4f} | {pos:.4f} | {r_err:.4f} | {d_err:.1%} |')
+        pts.append((int(t.params['solver_iterations']), r.wall_per_sim_s, pos))
     fig = figure(6, 4)
     ax = fig.add_subplot(1, 1, 1)
     for it in sorted({p[0] for p in pts}):
@@ -779,8 +812,8 @@ TOUCHING_SHARE = 0.5
 
 def section_contacts(ctx: Context) -> list[str]:
     """How often gliders touch (dense trials with ``contacts: true``): per class, and P1 with touching gliders."""
-    pairs = ctx.ok()
-    gl = [g for g in _gliders(pairs) if g.get('contact_fraction') is not None]
+    pairs = ctx.ok_as('contacts', DenseResult)
+    gl = [g for g in _gliders(pairs) if g.contact_fraction is not None]
     if not gl:
         return ['No glider carries a contact share: run the spec with `params: {contacts: true}`.']
     limit = ctx.spec.base.get('positive_periods', 100)
@@ -791,10 +824,10 @@ def section_contacts(ctx: Context) -> list[str]:
     fig = figure(6, 4)
     ax = fig.add_subplot(1, 1, 1)
     for cls, colour in (('all', None), ('C1', 'tab:red'), ('C2', 'tab:blue'), ('unclassified', 'tab:gray')):
-        sel = gl if cls == 'all' else [g for g in gl if g['class'] == cls]
+        sel = gl if cls == 'all' else [g for g in gl if g.glider_class == cls]
         if not sel:
             continue
-        share = np.array([g['contact_fraction'] for g in sel])
+        share = np.array([g.contact_fraction for g in sel])
         touching = wilson(int((share >= TOUCHING_SHARE).sum()), len(sel))
         lines.append(f'| {cls} | {len(sel)} | {touching.text(".0%", 1)} | {np.median(share):.2f} | '
                      f'{(share == 0).mean():.0%} |')
@@ -805,11 +838,11 @@ def section_contacts(ctx: Context) -> list[str]:
     legend(ax, 7)
     ctx.save(fig, 'contacts')
     n = len(pairs)
-    positive = sum(any(g['lifetime_periods'] >= limit for g in r['gliders']) for _, r in pairs)
-    touching_pos = sum(any(g['lifetime_periods'] >= limit and (g.get('contact_fraction') or 0.0) >= TOUCHING_SHARE
-                           for g in r['gliders']) for _, r in pairs)
-    iso_touching = sum(any(g['lifetime_periods'] >= limit and g['isolated']
-                           and (g.get('contact_fraction') or 0.0) >= TOUCHING_SHARE for g in r['gliders'])
+    positive = sum(any(g.lifetime_periods >= limit for g in r.gliders) for _, r in pairs)
+    touching_pos = sum(any(g.lifetime_periods >= limit and (g.contact_fraction or 0.0) >= TOUCHING_SHARE
+                           for g in r.gliders) for _, r in pairs)
+    iso_touching = sum(any(g.lifetime_periods >= limit and g.isolated
+                           and (g.contact_fraction or 0.0) >= TOUCHING_SHARE for g in r.gliders)
                        for _, r in pairs)
     lines += ['', f'| trials ({n}) with a glider >= {limit} periods | count [95 %] |', '| --- | --- |',
               f'| any | {wilson(positive, n).text(".1%", 1)} ({positive}) |',
@@ -822,9 +855,9 @@ def section_contacts(ctx: Context) -> list[str]:
 def section_pair_paths(ctx: Context) -> list[str]:
     """The path of each pair's centre (one sample per period), one panel per grid setting, and a table of
     how far the pairs went and how they ended: does a setting make pairs glide, and which way?"""
-    by_setting: dict[tuple[tuple[str, Any], ...], list[tuple[Trial, dict[str, Any]]]] = defaultdict(list)
-    for t, r in ctx.ok():
-        if r.get('trajectory_bl'):
+    by_setting: dict[tuple[tuple[str, Any], ...], list[tuple[Trial, DenseResult]]] = defaultdict(list)
+    for t, r in ctx.ok_gliders('pair_paths'):
+        if isinstance(r, DenseResult) and r.trajectory_bl:
             by_setting[other_grid_values(t.point, ())].append((t, r))
     if not by_setting:
         return ['No trajectory recorded (the spec needs `trajectory: true`).']
@@ -844,7 +877,7 @@ def section_pair_paths(ctx: Context) -> list[str]:
         travels = []
         trials = sorted(by_setting[setting], key=lambda tr: tr[0].seed)
         for t, r in trials:
-            xy = np.array([[[math.nan if v is None else v for v in q] for q in row] for row in r['trajectory_bl']])
+            xy = np.array([[[math.nan if v is None else v for v in q] for q in row] for row in r.trajectory_bl])
             centre = np.nanmean(xy[:, :2, :], axis=1) - np.nanmean(xy[0, :2, :], axis=0)
             travels.append(float(np.hypot(*centre[-1])) if len(centre) else math.nan)
             ax.plot(centre[:, 0], centre[:, 1], lw=0.9, label=f'seed {t.seed}')
@@ -857,8 +890,8 @@ def section_pair_paths(ctx: Context) -> list[str]:
         ax.tick_params(labelsize=6)
         est = bootstrap_mean(travels)
         ends = [r for _, r in trials]
-        r_end = ', '.join(f'{e["r_end_bl"]:.2f}' for e in ends if e.get('r_end_bl') is not None)
-        phi_end = ', '.join(f'{e["phi_end_deg"]:.1f}' for e in ends if e.get('phi_end_deg') is not None)
+        r_end = ', '.join(f'{e.r_end_bl:.2f}' for e in ends if isinstance(e, PairResult))
+        phi_end = ', '.join(f'{e.phi_end_deg:.1f}' for e in ends if isinstance(e, PairResult))
         lines.append(f'| {setting_cells(setting, keys)}{len(travels)} | {est.text(".2f")} | '
                      f'{", ".join(f"{v:.2f}" for v in travels)} | {r_end} | {phi_end} |')
     reach = max(max(abs(v) for ax in axes for line in ax.lines for v in (*line.get_xdata(), *line.get_ydata())
@@ -908,10 +941,10 @@ def trouble_lines(ctx: Context) -> list[str]:
 def margin_lines(ctx: Context) -> list[str]:
     """How close the trials that ran came to the trouble limits: the largest body tilt and the deepest contact
     overlap seen at their trouble checks (trial results that carry them), or nothing."""
-    results = [(t, ctx.records[t.key].get('result') or {}) for t in ctx.trials
-               if t.key in ctx.records and ctx.records[t.key].get('status') == 'ok']
-    tilts = [(r['peak_tilt_deg'], t.seed) for t, r in results if r.get('peak_tilt_deg') is not None]
-    overlaps = [(r['peak_overlap_mm'], t.seed) for t, r in results if r.get('peak_overlap_mm') is not None]
+    results = [(t, r) for t in ctx.trials if t.key in ctx.records and ctx.records[t.key].get('status') == 'ok'
+               for r in [read_result(t.kind, ctx.records[t.key].get('result') or {})] if isinstance(r, DenseResult)]
+    tilts = [(r.peak_tilt_deg, t.seed) for t, r in results if r.peak_tilt_deg is not None]
+    overlaps = [(r.peak_overlap_mm, t.seed) for t, r in results if r.peak_overlap_mm is not None]
     if not tilts or not overlaps:
         return []
     ph = config_of(results[0][0].params).physics

@@ -39,8 +39,8 @@ from . import physics_study
 from .configs import (config_of, make_config, make_gait,
                       noise_mapping)
 from .errors import SpecError
-from .results import (C2HarvestResult, DenseResult, InadmissiblePairResult, P6Result, PairResult, SingleResult,
-                      TrialResult)
+from .results import (AccuracyResult, C2HarvestResult, DenseResult, InadmissiblePairResult, P6Result, PairResult,
+                      SingleResult, TrialResult)
 
 #: A trial kind's function: (merged parameters, seed) -> a typed result (or a JSON-ready dict).
 TrialFunction = Callable[[Mapping[str, Any], int], 'TrialResult | dict[str, Any]']
@@ -270,7 +270,7 @@ def c2_harvest_trial(p: Mapping[str, Any], seed: int) -> C2HarvestResult:
                            gliders=len({(s.seed, min(s.i, s.j), max(s.i, s.j)) for s in samples}), trouble=trouble)
 
 
-def accuracy_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
+def accuracy_trial(p: Mapping[str, Any], seed: int) -> AccuracyResult:
     """Run time against error: one (physics rate, solver iterations) setting on a pair and a lone robot.
 
     Returns the pair's body-centre positions after 1 and 10 periods (BL), its mean separation r (BL),
@@ -300,7 +300,7 @@ def accuracy_trial(p: Mapping[str, Any], seed: int) -> dict[str, Any]:
     out['drift_um_per_cycle'] = single.drift_um_per_cycle
     if single.trouble:
         out['trouble'] = '; '.join(t for t in (out['trouble'], single.trouble) if t)
-    return out
+    return AccuracyResult(**out)
 
 
 # ------------------------------------------------------------------ registry

@@ -6,7 +6,7 @@ from pathlib import Path
 from typing import Any
 
 from smarticle_experiments.report import write_report
-from smarticle_experiments.results import P6Result, SingleResult
+from smarticle_experiments.results import InadmissiblePairResult, P6Result, PairResult, SingleResult
 from smarticle_experiments.spec import spec_from_mapping
 from smarticle_experiments.store import ResultStore
 
@@ -17,7 +17,7 @@ def glider(life: int, cls: str, phi: float, ongoing: bool = False, distance: flo
     """A glider record as the dense kind returns it."""
     return {'i': 0, 'j': 1, 'class': cls, 'start_period': 0, 'lifetime_periods': life, 'ongoing': ongoing,
             'r_bl': 1.3 if cls == 'C1' else 1.5, 'theta_deg': 10.0, 'phi_deg': phi, 'distance_w': distance,
-            'path_w': distance, 'v_com_w_per_period': 0.01, 'beta': 1.8, 'isolated': True,
+            'path_w': distance, 'v_com_w_per_period': 0.01, 'beta': 1.8, 'isolated': True, 'isolation': 1.0,
             'com_path_w': [[0.0, 0.0], [0.01, 0.0], [0.02, 0.0]]}
 
 
@@ -31,6 +31,18 @@ def dense_result(seed: int) -> dict[str, Any]:
             'longest_periods': 300 if positive else 99, 'longest_class': 'C1', 'longest_distance_w': 2.9,
             'gliders': gliders, 'trajectory_bl': [[[0.0, 0.0], [1.0, 0.0]], [[0.1, 0.0], [1.1, 0.0]]],
             'trajectory_dt': 1.6}
+
+
+def pair_result(gliders: list[dict[str, Any]], **fields: Any) -> dict[str, Any]:
+    """A pair trial's stored result (every field of ``PairResult``): a start that stayed apart, with ``fields``
+    replaced."""
+    base = PairResult(periods_run=75.0, trouble='', peak_tilt_deg=None, peak_overlap_mm=None,
+                      n_gliders=len(gliders), positive=False, positive_isolated=False, longest_periods=0,
+                      longest_class='', longest_distance_w=None, gliders=[], trajectory_bl=[], trajectory_dt=1.6,
+                      r0_bl=1.3, theta0_deg=0.0, phi0_deg=180.0, admissible=True, bound_tail_periods=0,
+                      bound_at_end=False, colliding_tail_periods=0, colliding_at_end=False, out_of_reach_at_end=True,
+                      late_w=0.0, r_end_bl=3.0, phi_end_deg=180.0).as_dict()
+    return {**base, 'gliders': gliders, **fields}
 
 
 def report_of(spec: Any, folder: Path, result: Any) -> str:
@@ -164,7 +176,7 @@ def test_step_convergence_compares_each_step_with_the_finest(tmp_path: Path) -> 
         g = {**glider(150, 'C1', 180.0), 'r_bl': 1.50 + 0.01 * (t.seed % 3),
              'v_com_w_per_period': travel[dt] / 100.0 + 0.0005 * (t.seed % 3)}
         store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': dict(t.point), 'status': 'ok',
-                     'result': {'trouble': '', 'gliders': [g]}})
+                     'result': pair_result([g])})
     report = write_report(spec, trials, store, CODE).read_text()
     rows = {line.split(' | ')[0].lstrip('| '): line for line in report.splitlines() if line.startswith('| 1/')}
     assert all(' | 10 | 1e-07 | ' in row for row in rows.values())    # the default's solver and Bullet's threshold
@@ -188,7 +200,7 @@ def test_step_convergence_takes_the_strictest_residual_threshold_as_the_referenc
         threshold = t.params.get('physics', {}).get('solver_residual_threshold')
         g = {**glider(150, 'C1', 180.0), 'r_bl': 1.50, 'v_com_w_per_period': travel[threshold] / 100.0}
         store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': dict(t.point), 'status': 'ok',
-                     'result': {'trouble': '', 'gliders': [g]}})
+                     'result': pair_result([g])})
     report = write_report(spec, trials, store, CODE).read_text()
     rows = [line for line in report.splitlines() if line.startswith('| 1/960 s')]
     assert [row.split(' | ')[2] for row in rows] == ['1e-04', '1e-05', '1e-07']
@@ -209,7 +221,7 @@ def test_step_convergence_gives_each_other_setting_its_own_reference(tmp_path: P
         g = {**glider(150, 'C1', 180.0), 'r_bl': 1.50,
              'v_com_w_per_period': travel[(physics['restitution'], physics['time_step'])] / 100.0}
         store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': dict(t.point), 'status': 'ok',
-                     'result': {'trouble': '', 'gliders': [g]}})
+                     'result': pair_result([g])})
     report = write_report(spec, trials, store, CODE).read_text()
     assert '| physics.restitution | time step | solver iterations |' in report
     rows = [line for line in report.splitlines() if line.startswith(('| 0.0 |', '| 0.8 |'))]
@@ -250,8 +262,9 @@ def test_the_basin_counts_a_start_bound_only_if_it_keeps_colliding_and_repelled_
     store = ResultStore(tmp_path / 'p4')
     for t in trials:
         fields = outcomes[(int(t.params['theta_deg']), int(t.params['phi_deg']))]
-        result = {'admissible': False, 'why': 'overlap', 'trouble': ''} if fields is None else \
-            {'admissible': True, 'trouble': '', 'r_end_bl': 1.4, 'gliders': [], **fields}
+        result = InadmissiblePairResult(r0_bl=1.3, theta0_deg=150.0, phi0_deg=0.0, admissible=False, why='overlap',
+                                        trouble='', gliders=[]).as_dict() if fields is None else \
+            pair_result([], r_end_bl=1.4, **fields)
         store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': dict(t.point), 'status': 'ok',
                      'result': result})
     report = write_report(spec, trials, store, CODE).read_text()
@@ -260,8 +273,8 @@ def test_the_basin_counts_a_start_bound_only_if_it_keeps_colliding_and_repelled_
     assert 'By the earlier rule (r < r_bind or contact in each of the last 5 periods) 2 were bound.' in report
     assert '| theta in quadrants 1, 4 | 1/2 (' in report and '| theta in quadrants 2, 3 | 0/1 (' in report
     assert '| parallel normals (phi 0) | 0/1 (' in report
-    assert basin_outcome({'admissible': True, 'bound_at_end': True}) == 'bound'   # a record from before the rule
-    assert basin_outcome({'admissible': True, 'bound_at_end': False}) == 'repelled'
+    within_reach = PairResult.from_dict(pair_result([], bound_at_end=True, out_of_reach_at_end=False))
+    assert basin_outcome(within_reach) == 'neither'   # the earlier rule's 'bound' is not enough
 
 
 def test_the_p6_report_gives_means_and_a_log_rank_test_of_open_loop_against_feedback(tmp_path: Path) -> None:
@@ -312,7 +325,7 @@ def test_pair_paths_show_which_setting_makes_pairs_travel(tmp_path: Path) -> Non
     def result(t: Any) -> dict[str, Any]:
         step = 0.03 if t.point['phase2'] else 0.0       # W per period of the pair's centre
         path = [[[k * step, 0.0], [k * step, 1.5]] for k in range(101)]   # two robots 1.5 BL apart
-        return {'trouble': '', 'gliders': [], 'trajectory_bl': path, 'r_end_bl': 1.5, 'phi_end_deg': 180.0}
+        return pair_result([], trajectory_bl=path, r_end_bl=1.5, phi_end_deg=180.0)
 
     report = report_of(spec, tmp_path / 'paths', result)
     rows = {line.split(' | ')[0].lstrip('| '): line for line in report.splitlines() if line.startswith('| 0.')}
@@ -333,7 +346,7 @@ def test_step_convergence_reads_a_mujoco_trial_s_own_step(tmp_path: Path) -> Non
         g = {**glider(100, 'C1', 180.0), 'r_bl': 1.50,
              'v_com_w_per_period': travel[t.params['mujoco']['time_step']] / 100.0}
         store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': dict(t.point), 'status': 'ok',
-                     'result': {'trouble': '', 'gliders': [g]}})
+                     'result': pair_result([g])})
     report = write_report(spec, trials, store, CODE).read_text()
     rows = [line for line in report.splitlines() if line.startswith('| 1/')]
     assert [row.split(' | ')[0] for row in rows] == ['| 1/4800 s', '| 1/9600 s']
