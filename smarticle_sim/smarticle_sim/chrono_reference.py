@@ -45,7 +45,7 @@ from smarticle_common.topics import FSR_FACES
 from .batch import check_run_request, scene_period
 from .errors import SceneError, SimError
 from .physics import arm_masses, authors_inertias, box_inertia
-from .scenes import Scene, pair_scene
+from .scenes import RobotPlacement, Scene, pair_scene
 from .settings import PhysicsConfig, SimConfig
 
 #: Environment variable naming the driver executable (default: ``DEFAULT_DRIVER``).
@@ -300,6 +300,31 @@ def _config(p: Mapping[str, Any]) -> SimConfig:
     return SimConfig(robot, physics)
 
 
+def _checked(params: Mapping[str, Any], defaults: Mapping[str, Any], kind: str) -> dict[str, Any]:
+    """``defaults`` overridden by ``params``; SimError on a parameter the kind does not know."""
+    unknown = sorted(set(params) - set(defaults))
+    if unknown:
+        raise SimError(f'{kind}: unknown parameter {unknown[0]!r}; known: {", ".join(sorted(defaults))}')
+    return {**defaults, **params}
+
+
+def _settings(p: Mapping[str, Any]) -> ChronoSettings:
+    """ChronoSettings of a trial's ``chrono`` mapping."""
+    unknown = sorted(set(p['chrono']) - CHRONO_FIELDS)
+    if unknown:
+        raise SimError(f'chrono.{unknown[0]} is not a ChronoSettings field; known: {", ".join(sorted(CHRONO_FIELDS))}')
+    return ChronoSettings(**dict(p['chrono']))
+
+
+def _gait(p: Mapping[str, Any], config: SimConfig) -> GaitConfig:
+    """The square gait of a trial's ``alpha_max_deg`` and ``servo_speed`` (default: the robot's)."""
+    try:
+        return GaitConfig.from_degrees(float(p['alpha_max_deg']),
+                                       servo_speed=p['servo_speed'] or config.robot.servo_speed)
+    except GaitError as exc:
+        raise SimError(f'gait: {exc}') from None
+
+
 def pair_chrono_trial(params: Mapping[str, Any], seed: int) -> dict[str, Any]:
     """Two robots from pair coordinates run in Chrono: where the pair ends, how far it travelled.
 
@@ -312,22 +337,10 @@ def pair_chrono_trial(params: Mapping[str, Any], seed: int) -> dict[str, Any]:
     ``colliding_tail_periods`` (contact in each), ``bound_at_end`` (tail >= ``bound_tail``); the peaks and
     the wall time. ChronoUnavailable when Chrono is not built.
     """
-    unknown = sorted(set(params) - set(PAIR_CHRONO_DEFAULTS))
-    if unknown:
-        raise SimError(f'pair_chrono_trial: unknown parameter {unknown[0]!r}; known: '
-                       f'{", ".join(sorted(PAIR_CHRONO_DEFAULTS))}')
-    p = {**PAIR_CHRONO_DEFAULTS, **params}
-    config = _config(p)
-    unknown = sorted(set(p['chrono']) - CHRONO_FIELDS)
-    if unknown:
-        raise SimError(f'chrono.{unknown[0]} is not a ChronoSettings field; known: {", ".join(sorted(CHRONO_FIELDS))}')
-    settings = ChronoSettings(**dict(p['chrono']))
+    p = _checked(params, PAIR_CHRONO_DEFAULTS, 'pair_chrono_trial')
+    config, settings = _config(p), _settings(p)
     driver_path()    # before any work: one clear line when Chrono is absent
-    try:
-        gait = GaitConfig.from_degrees(float(p['alpha_max_deg']),
-                                       servo_speed=p['servo_speed'] or config.robot.servo_speed)
-    except GaitError as exc:
-        raise SimError(f'gait: {exc}') from None
+    gait = _gait(p, config)
     r, theta, phi = float(p['r_bl']), float(p['theta_deg']), float(p['phi_deg'])
     start = {'r0_bl': r, 'theta0_deg': theta, 'phi0_deg': phi, 'phase2': float(p['phase2'])}
     try:
@@ -340,6 +353,35 @@ def pair_chrono_trial(params: Mapping[str, Any], seed: int) -> dict[str, Any]:
                      fixed=(0,) if p['hold_first'] else ())
     return {**start, 'admissible': True, **pair_figures(rec, gait.period, config.physics.control_tick * sample_every,
                                                         float(p['r_bind_bl']), int(p['bound_tail']))}
+
+
+#: Parameters of ``single_chrono_trial`` and their defaults (the project's single kind's names and units).
+SINGLE_CHRONO_DEFAULTS: dict[str, Any] = {
+    'preset': 'small', 'physics': {}, 'robot': {}, 'chrono': {},
+    'alpha_max_deg': 90.0, 'servo_speed': None, 'periods': 20.0, 'sample_every': 1,
+}
+
+
+def single_chrono_trial(params: Mapping[str, Any], seed: int) -> dict[str, Any]:
+    """One robot alone in Chrono (P7), its heading drawn from ``seed`` as the project's single kind does: the
+    drift per cycle in micrometres (net, and the mean per-cycle step). ChronoUnavailable without the build."""
+    p = _checked(params, SINGLE_CHRONO_DEFAULTS, 'single_chrono_trial')
+    config, settings = _config(p), _settings(p)
+    driver_path()
+    gait = _gait(p, config)
+    heading = float(np.random.default_rng(seed).uniform(-math.pi, math.pi))
+    a = gait.alpha_max
+    scene = Scene((RobotPlacement(0.0, 0.0, heading, a, a, gait),), name='single', seed=seed)
+    sample_every = int(p['sample_every'])
+    rec = run_chrono(config, scene, float(p['periods']), sample_every, settings)
+    per = max(1, round(gait.period / (config.physics.control_tick * sample_every)))
+    xy = rec.poses[::per, 0, :2]
+    cycles = max(len(xy) - 1, 1)
+    steps = np.linalg.norm(np.diff(xy, axis=0), axis=1)
+    return {'heading_deg': math.degrees(heading), 'trouble': rec.trouble, 'cycles': len(xy) - 1,
+            'drift_um_per_cycle': float(np.linalg.norm(xy[-1] - xy[0]) / cycles * 1e6),
+            'step_um_per_cycle': float(steps.mean() * 1e6) if steps.size else None,
+            'wall_time_s': _number(rec.meta.get('wall_time_s'))}
 
 
 def pair_figures(rec: Recording, period: float, sample_interval: float, r_bind_bl: float,

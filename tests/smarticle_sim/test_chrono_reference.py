@@ -17,7 +17,7 @@ from smarticle_common.poses import heading_quaternion
 
 from smarticle_sim.chrono_reference import (ChronoSettings, ChronoUnavailable, chrono_available, driver_path,
                                             pair_chrono_trial, read_recording, run_chrono,
-                                            scene_document)
+                                            scene_document, single_chrono_trial)
 from smarticle_sim.errors import SceneError, SimError
 from smarticle_sim.physics import box_inertia
 from smarticle_sim.scenes import RobotPlacement, Scene, pair_scene
@@ -120,8 +120,12 @@ def test_without_the_driver_every_run_says_so_in_one_line(tmp_path: Path, config
         run_chrono(config, in_phase_pair(config, gait90), 1.0, 3)
     with pytest.raises(ChronoUnavailable):
         pair_chrono_trial({'periods': 1.0}, 0)
+    with pytest.raises(ChronoUnavailable):
+        single_chrono_trial({'periods': 1.0}, 0)
     with pytest.raises(SimError, match='unknown parameter'):
         pair_chrono_trial({'period': 1.0}, 0)
+    with pytest.raises(SimError, match='not a ChronoSettings field'):
+        pair_chrono_trial({'chrono': {'step': 1e-4}}, 0)
 
 
 @needs_chrono
@@ -160,3 +164,10 @@ def test_the_pair_kind_reports_its_end_state(config: SimConfig) -> None:
     assert math.isfinite(result['travel_w']) and result['wall_time_s'] > 0.0
     overlapping = pair_chrono_trial({'r_bl': 0.5, 'periods': 1.0}, 3)
     assert not overlapping['admissible'] and 'overlap' in overlapping['why']
+
+
+@needs_chrono
+def test_a_lone_robot_drifts_a_little() -> None:
+    result = single_chrono_trial({'periods': 2.0}, 5)
+    assert result['trouble'] == '' and result['cycles'] == 2
+    assert 0.0 < result['drift_um_per_cycle'] < 5000.0
