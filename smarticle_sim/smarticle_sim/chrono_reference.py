@@ -358,7 +358,7 @@ def pair_chrono_trial(params: Mapping[str, Any], seed: int) -> dict[str, Any]:
 #: Parameters of ``single_chrono_trial`` and their defaults (the project's single kind's names and units).
 SINGLE_CHRONO_DEFAULTS: dict[str, Any] = {
     'preset': 'small', 'physics': {}, 'robot': {}, 'chrono': {},
-    'alpha_max_deg': 90.0, 'servo_speed': None, 'periods': 20.0, 'sample_every': 1,
+    'alpha_max_deg': 90.0, 'servo_speed': None, 'periods': 20.0, 'sample_every': 3,
 }
 
 

@@ -147,7 +147,7 @@ def test_an_in_phase_pair_runs_end_to_end_with_the_gait(config: SimConfig, gait9
     for k in range(2):
         assert np.abs(rec.arm_angles[:, k] - expected).max() < 0.02
     # the start is where the scene put the robots, the bodies move with the gait and stay flat
-    assert rec.poses[0, :, :2] == pytest.approx([[r.x, r.y] for r in scene.robots], abs=1e-6)
+    assert rec.poses[0, :, :2] == pytest.approx(np.array([[r.x, r.y] for r in scene.robots]), abs=1e-6)
     moved = np.linalg.norm(np.diff(rec.poses[:, :, :2], axis=0), axis=2).sum(axis=0)
     assert np.all(moved > 1e-4)
     assert rec.meta['peak_tilt_deg'] < 10.0

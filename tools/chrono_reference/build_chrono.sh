@@ -83,7 +83,7 @@ echo "Chrono core built in $(( $(date +%s) - start )) s: $build/lib"
 
 # The project's driver, linked against that build.
 nice -n "$niceness" cmake -S "$here" -B "$prefix/driver" -G "$generator" -DCMAKE_BUILD_TYPE=Release \
-    -DCHRONO_SOURCE_DIR="$chrono_src" -DCHRONO_BUILD_DIR="$build" -DEIGEN3_INCLUDE_DIR="$eigen" \
+    -DCHRONO_BUILD_DIR="$build" -DEIGEN3_INCLUDE_DIR="$eigen" \
     -DTHRUST_INCLUDE_DIR="$cccl"
 nice -n "$niceness" cmake --build "$prefix/driver" -j "$jobs"
 echo "driver: $prefix/driver/smarticle_chrono"
