@@ -8,6 +8,9 @@ Usage:
   python tools/chrono_reference/reference_check.py --phase2 0 0.1 --periods 40 \
       --engines chrono bullet --bullet-steps 960 9600 --seeds 0 --out out/chrono_reference/pair.json
 
+Bullet's contacts are read at the samples only, so its colliding tail counts touches at sample instants;
+Chrono's counts any overlap between samples.
+
 Needs the Chrono build for the chrono engine (tools/chrono_reference/build_chrono.sh); without it the
 Chrono rows are skipped with one line and the Bullet rows still run.
 """
@@ -23,6 +26,7 @@ from typing import Any
 
 from smarticle_common.cli import seeds_argument
 from smarticle_common.gait import GaitConfig
+from smarticle_common.runs import save_npz
 
 from smarticle_sim.batch import run_trial
 from smarticle_sim.chrono_reference import ChronoSettings, ChronoUnavailable, pair_figures, run_chrono
@@ -47,6 +51,8 @@ def run_one(engine: str, step: float, phase2: float, seed: int, args: argparse.N
         if args.hold_first:
             raise SystemExit('--hold-first is a Chrono option here')
         rec = run_trial(config, scene, args.periods, sample_every=args.sample_every, record_contacts=True)
+    if args.keep is not None:
+        save_npz(rec, args.keep / f'{engine}_{step:.3g}_phase{phase2:g}_seed{seed}.npz')
     figures = pair_figures(rec, gait.period, config.physics.control_tick * args.sample_every, 1.6, 10)
     if engine == 'bullet':
         figures['wall_time_s'] = None
@@ -78,6 +84,7 @@ def main() -> int:
     parser.add_argument('--hold-first', action='store_true', help="hold robot 1's body in place (Chrono)")
     parser.add_argument('--seeds', type=seeds_argument, default=[0], help='scene seeds (7, 0..3, 0,3)')
     parser.add_argument('--out', type=Path, help='also write the rows as JSON here')
+    parser.add_argument('--keep', type=Path, help='also save each run (npz, the run format) in this folder')
     args = parser.parse_args()
     rows = []
     print('| ' + ' | '.join(COLUMNS) + ' |')
@@ -93,7 +100,8 @@ def main() -> int:
                         print(f'skipped: {exc}', file=sys.stderr)
                         break
                     rows.append(row)
-                    print('| ' + ' | '.join(cell(row[c]) for c in COLUMNS) + ' |', flush=True)
+                    print('| ' + ' | '.join(f'{row[c]:.3g}' if c == 'step' else cell(row[c]) for c in COLUMNS)
+                          + ' |', flush=True)
     if args.out is not None:
         args.out.parent.mkdir(parents=True, exist_ok=True)
         args.out.write_text(json.dumps({'args': {k: str(v) if isinstance(v, Path) else v
