@@ -34,7 +34,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from smarticle_common.errors import SpecError
+from smarticle_common.errors import RobotSpecError
 from smarticle_common.facts import robot_preset
 from smarticle_common.gait import GaitConfig, GaitError, open_loop_angles
 from smarticle_common.pairs import one_pair
@@ -291,7 +291,7 @@ def _config(p: Mapping[str, Any]) -> SimConfig:
     """SimConfig of a trial's ``preset``, ``physics`` and ``robot`` (ConfigError / SimError on bad fields)."""
     try:
         robot = replace(robot_preset(str(p['preset'])), **dict(p.get('robot') or {}))
-    except (SpecError, TypeError) as exc:
+    except (RobotSpecError, TypeError) as exc:
         raise SimError(f'robot: {exc}') from None
     try:
         physics = replace(PhysicsConfig(), **dict(p.get('physics') or {}))
