@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from smarticle_common.cli import seeds_argument
+from smarticle_common.facts import R_BIND_BL
 from smarticle_common.gait import GaitConfig
 from smarticle_common.runs import save_npz
 
@@ -53,7 +54,7 @@ def run_one(engine: str, step: float, phase2: float, seed: int, args: argparse.N
         rec = run_trial(config, scene, args.periods, sample_every=args.sample_every, record_contacts=True)
     if args.keep is not None:
         save_npz(rec, args.keep / f'{engine}_{step:.3g}_phase{phase2:g}_seed{seed}.npz')
-    figures = pair_figures(rec, gait.period, config.physics.control_tick * args.sample_every, 1.6, 10)
+    figures = pair_figures(rec, gait.period, config.physics.control_tick * args.sample_every, R_BIND_BL, 10)
     if engine == 'bullet':
         figures['wall_time_s'] = None
     return {'engine': engine, 'step': step, 'phase2': phase2, 'seed': seed, **figures}
