@@ -19,7 +19,7 @@ from smarticle_common.launching import executable
 from smarticle_common.params import ParamSpec
 
 ROOT = Path(__file__).resolve().parents[1]
-SETUPS = sorted(p for p in [*ROOT.glob('*/setup.py'), *ROOT.glob('bags/*/setup.py')]
+SETUPS = sorted(p for p in [*ROOT.glob('*/setup.py'), *ROOT.glob('bags/*/setup.py'), *ROOT.glob('examples/*/setup.py')]
                 if p.parent.name != 'smarticle_experiments')
 
 #: Node executable -> (module, its parameter table).

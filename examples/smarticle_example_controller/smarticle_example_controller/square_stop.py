@@ -19,6 +19,7 @@ Without ``lockstep`` (a robot board) it publishes at ``rate`` Hz on its node clo
 from __future__ import annotations
 
 import math
+import sys
 from typing import Any
 
 import rclpy
@@ -26,6 +27,7 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.time import Time
 from smarticle_common import topics
+from smarticle_common.cli import version_of
 from smarticle_common.facts import GAIT_PERIOD, SERVO_SPEED
 
 NODE_NAME = 'square_stop'
@@ -40,19 +42,41 @@ def square_corner(t: float, start_at: float, period: float, amplitude: float) ->
     return corners[(quarter + 1) % 4]
 
 
+#: The node's parameters: name -> (default, meaning with units).
+PARAMETERS: dict[str, tuple[Any, str]] = {
+    'robot_id': (0, 'the robot this node drives (its topics /smarticle_<robot_id>/...)'),
+    'amplitude_deg': (60.0, 'square gait amplitude alpha_max in degrees, in (0, 120]'),
+    'period': (GAIT_PERIOD, 'gait period in seconds'),
+    'start_at': (0.5, 'sim or wall time in seconds at which the gait starts'),
+    'stop_force': (5.0, 'FSR force in newtons above which the gait stops moving to new corners'),
+    'speed': (SERVO_SPEED, 'commanded servo speed in rad/s'),
+    'lockstep': (False, "answer each /clock time t with one command stamped t (the sim's lock-step)"),
+}
+
+
+def usage() -> str:
+    """``--help``: what the node does and its parameters with their defaults."""
+    lines = [f'usage: {NODE_NAME} [--help] [--version] [--ros-args -p name:=value ...]', '',
+             'A square gait that stops on contact (the example controller of the smarticle stack).', '',
+             'parameters:']
+    lines += [f'  {name} (default {default!r}): {meaning}' for name, (default, meaning) in PARAMETERS.items()]
+    return '\n'.join(lines)
+
+
 class SquareStopNode(Node):
     """A square gait that stops on contact, answering the simulation's clock in lock-step."""
 
     def __init__(self, **node_options: Any) -> None:
         """Declare the parameters, the publisher and the subscriptions."""
         super().__init__(NODE_NAME, **node_options)
-        self.robot_id = int(self.declare_parameter('robot_id', 0).value)
-        self.amplitude = math.radians(float(self.declare_parameter('amplitude_deg', 60.0).value))
-        self.period = float(self.declare_parameter('period', GAIT_PERIOD).value)
-        self.start_at = float(self.declare_parameter('start_at', 0.5).value)
-        self.stop_force = float(self.declare_parameter('stop_force', 5.0).value)
-        self.speed = float(self.declare_parameter('speed', SERVO_SPEED).value)
-        self.lockstep = bool(self.declare_parameter('lockstep', False).value)
+        value = {name: self.declare_parameter(name, default).value for name, (default, _) in PARAMETERS.items()}
+        self.robot_id = int(value['robot_id'])
+        self.amplitude = math.radians(float(value['amplitude_deg']))
+        self.period = float(value['period'])
+        self.start_at = float(value['start_at'])
+        self.stop_force = float(value['stop_force'])
+        self.speed = float(value['speed'])
+        self.lockstep = bool(value['lockstep'])
         if not (0.0 < self.amplitude <= math.radians(120.0) and self.period > 0.0 and self.speed > 0.0):
             raise ValueError('square_stop: amplitude_deg must be in (0, 120], period and speed positive')
         self.JointState = topics.message_class(topics.spec_of('joint_commands').type)
@@ -116,6 +140,14 @@ class SquareStopNode(Node):
 
 def main(args: list[str] | None = None) -> None:
     """Entry point of `ros2 run smarticle_example_controller square_stop`."""
+    argv = sys.argv[1:] if args is None else args
+    words = argv[:argv.index('--ros-args')] if '--ros-args' in argv else argv
+    if '--version' in words:
+        print(f'{NODE_NAME} {version_of("smarticle_example_controller")}')
+        return
+    if '-h' in words or '--help' in words:
+        print(usage())
+        return
     rclpy.init(args=args)
     node = None
     try:
