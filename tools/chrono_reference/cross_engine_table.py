@@ -1,13 +1,15 @@
-"""The cross-engine table (docs/chrono_reference.md): Bullet against Chrono over a ring of pair starts and a
+"""The cross-engine table (docs/chrono_reference.md): Bullet and MuJoCo against Chrono over a ring of pair starts and a
 lone robot's headings, with intervals and the verdicts of the rules fixed in the doc.
 
 Reads what the runs wrote and runs nothing:
   * the pair rows of ``reference_check.py`` (``--out`` JSON files, one per start: the ring);
-  * the lone robot's trials of the specs ``single_chrono`` and ``single_bullet_40`` (their result stores).
+  * the lone robot's trials of the specs ``single_chrono``, ``single_bullet_40`` and ``single_mujoco_40``
+    (their result stores).
 
 Usage:
   python tools/chrono_reference/cross_engine_table.py --ring out/cross/ring_*.json \
-      --single-chrono out/cross/store/single_chrono --single-bullet out/cross/store/single_bullet_40
+      --single-chrono out/cross/store/single_chrono --single-bullet out/cross/store/single_bullet_40 \
+      --single-mujoco out/cross/store/single_mujoco_40
 
 Intervals: 95 % Wilson for shares (scipy.stats.binomtest), 95 % percentile bootstrap for means (10 000
 resamples of the starts, numpy seed 0); shares compared by Fisher's exact test (two-sided).
@@ -34,7 +36,9 @@ GLIDE_SPEED = 1.0             # W per 100 periods
 FISHER_P = 0.05
 SPEED_FACTOR = 2.0
 LONE_STILL_UM = 54.0          # um per cycle (0.1 W per 100 periods)
-ENGINES = ('bullet', 'chrono')
+ENGINES = ('bullet', 'chrono', 'mujoco')
+#: The engine pairs a verdict is given for (where both ran).
+VERSUS = (('bullet', 'chrono'), ('mujoco', 'chrono'), ('bullet', 'mujoco'))
 
 
 def wilson(k: int, n: int) -> tuple[float, float, float]:
@@ -110,13 +114,16 @@ def in_phase(rows: dict[tuple[str, float], list[dict[str, Any]]]) -> list[str]:
         r_ends[engine] = boot([r['r_end_bl'] for r in rs])
         lines.append(f'| {engine} | {len(rs)} | {k}/{len(rs)} = {fmt(wilson(k, len(rs)), share=True)} | '
                      f'{fmt(r_ends[engine])} | {fmt(boot([r["travel_w_per_100"] for r in rs]))} |')
-    if len(counts) == 2:
-        (kb, nb), (kc, nc) = counts['bullet'], counts['chrono']
-        p = fisher_exact([[kb, nb - kb], [kc, nc - kc]]).pvalue
-        lines.append('')
-        lines.append(f'State: Fisher p = {p:.3g}: **{"agree" if p >= FISHER_P else "differ"}**. r_end: intervals '
-                     f'{"overlap" if overlap(r_ends["bullet"], r_ends["chrono"]) else "do not overlap"}: '
-                     f'**{"agree" if overlap(r_ends["bullet"], r_ends["chrono"]) else "differ"}**.')
+    lines.append('')
+    for a, b in VERSUS:
+        if a not in counts or b not in counts:
+            continue
+        (ka, na), (kb, nb) = counts[a], counts[b]
+        p = fisher_exact([[ka, na - ka], [kb, nb - kb]]).pvalue
+        both = overlap(r_ends[a], r_ends[b])
+        lines.append(f'- {a} vs {b}: state: Fisher p = {p:.3g}: **{"agree" if p >= FISHER_P else "differ"}**; '
+                     f'r_end: intervals {"overlap" if both else "do not overlap"}: '
+                     f'**{"agree" if both else "differ"}**.')
     return lines
 
 
@@ -135,16 +142,18 @@ def offset(rows: dict[tuple[str, float], list[dict[str, Any]]]) -> list[str]:
         phis = ', '.join(f'{r["phi_end_deg"]:.0f}' for r in g) or '-'
         lines.append(f'| {engine} | {len(rs)} | {len(g)}/{len(rs)} = {fmt(wilson(len(g), len(rs)), share=True)} | '
                      f'{fmt(boot(speeds[engine]))} | {phis} |')
-    if len(counts) == 2:
-        (kb, nb), (kc, nc) = counts['bullet'], counts['chrono']
-        p = fisher_exact([[kb, nb - kb], [kc, nc - kc]]).pvalue
-        lines.append('')
-        text = f'Share: Fisher p = {p:.3g}: **{"agree" if p >= FISHER_P else "differ"}**. Speed of the gliders: '
-        if min(len(speeds['bullet']), len(speeds['chrono'])) < 2:
+    lines.append('')
+    for a, b in VERSUS:
+        if a not in counts or b not in counts:
+            continue
+        (ka, na), (kb, nb) = counts[a], counts[b]
+        p = fisher_exact([[ka, na - ka], [kb, nb - kb]]).pvalue
+        text = f'- {a} vs {b}: share: Fisher p = {p:.3g}: **{"agree" if p >= FISHER_P else "differ"}**; speed: '
+        if min(len(speeds[a]), len(speeds[b])) < 2:
             text += '**not decided** (fewer than 2 gliders in an engine).'
         else:
-            ratio = float(np.mean(speeds['bullet']) / np.mean(speeds['chrono']))
-            text += (f'Bullet / Chrono = {ratio:.2f}: '
+            ratio = float(np.mean(speeds[a]) / np.mean(speeds[b]))
+            text += (f'{a} / {b} = {ratio:.2f}: '
                      f'**{"agree" if 1 / SPEED_FACTOR <= ratio <= SPEED_FACTOR else "differ"}**.')
         lines.append(text)
     return lines
@@ -152,8 +161,9 @@ def offset(rows: dict[tuple[str, float], list[dict[str, Any]]]) -> list[str]:
 
 def per_start(rows: dict[tuple[str, float], list[dict[str, Any]]]) -> list[str]:
     """Every run: theta, phase, engine, r_end, phi_end, travel per 100, bound tail, the rule's label."""
-    lines = ['| theta (deg) | phase2 | Bullet r_end / phi_end / per 100 / tail | '
-             'Chrono r_end / phi_end / per 100 / tail |', '| ---: | ---: | --- | --- |']
+    present = [e for e in ENGINES if any(k[0] == e for k in rows)]
+    lines = ['| theta (deg) | phase2 | ' + ' | '.join(f'{e}: r_end / phi_end / per 100 / tail' for e in present) + ' |',
+             '| ---: | ---: |' + ' --- |' * len(present)]
     for phase in (0.0, 0.1):
         by_theta: dict[float, dict[str, dict[str, Any]]] = {}
         for engine in ENGINES:
@@ -161,7 +171,7 @@ def per_start(rows: dict[tuple[str, float], list[dict[str, Any]]]) -> list[str]:
                 by_theta.setdefault(r['theta'], {})[engine] = r
         for theta in sorted(by_theta):
             cells = []
-            for engine in ENGINES:
+            for engine in present:
                 run = by_theta[theta].get(engine)
                 if run is None:
                     cells.append('-')
@@ -169,7 +179,7 @@ def per_start(rows: dict[tuple[str, float], list[dict[str, Any]]]) -> list[str]:
                 label = ('still' if still(run) else '') if phase == 0.0 else ('glides' if glides(run) else '')
                 cells.append(f'{run["r_end_bl"]:.2f} / {run["phi_end_deg"]:.0f} / {run["travel_w_per_100"]:.2g} / '
                              f'{run["bound_tail_periods"]}{" " + label if label else ""}')
-            lines.append(f'| {theta:.0f} | {phase:g} | {cells[0]} | {cells[1]} |')
+            lines.append(f'| {theta:.0f} | {phase:g} | ' + ' | '.join(cells) + ' |')
     return lines
 
 
@@ -186,12 +196,13 @@ def single_results(folder: Path) -> list[dict[str, Any]]:
     return sorted(out, key=lambda r: r['seed'])
 
 
-def lone(chrono: Path | None, bullet: Path | None) -> list[str]:
+def lone(folders: dict[str, Path | None]) -> list[str]:
     """Row (c): a lone robot's drift per cycle."""
     lines = ['| engine | seed: heading (deg) -> drift (um per cycle) | mean drift (um per cycle) |',
              '| --- | --- | --- |']
     means = {}
-    for engine, folder in (('bullet', bullet), ('chrono', chrono)):
+    for engine in ENGINES:
+        folder = folders.get(engine)
         if folder is None:
             continue
         rs = single_results(folder)
@@ -201,13 +212,15 @@ def lone(chrono: Path | None, bullet: Path | None) -> list[str]:
         each = '; '.join(f'{r["seed"]}: {r["heading_deg"]:.0f} -> {r["drift_um_per_cycle"]:.0f}'
                          + (f' ({r["trouble"]})' if r.get('trouble') else '') for r in rs)
         lines.append(f'| {engine} | {each} | {fmt(means[engine])} |')
-    if len(means) == 2:
-        b, c = means['bullet'][0], means['chrono'][0]
-        both_still = b < LONE_STILL_UM and c < LONE_STILL_UM
-        ratio = b / c if c > 0 else math.inf
+    lines.append('')
+    for a, b in VERSUS:
+        if a not in means or b not in means:
+            continue
+        va, vb = means[a][0], means[b][0]
+        both_still = va < LONE_STILL_UM and vb < LONE_STILL_UM
+        ratio = va / vb if vb > 0 else math.inf
         ok = both_still or 1 / SPEED_FACTOR <= ratio <= SPEED_FACTOR
-        lines.append('')
-        lines.append(f'Bullet / Chrono = {ratio:.2f}{", both under 54 um" if both_still else ""}: '
+        lines.append(f'- {a} / {b} = {ratio:.2f}{", both under 54 um" if both_still else ""}: '
                      f'**{"agree" if ok else "differ"}**.')
     return lines
 
@@ -218,11 +231,13 @@ def main() -> int:
     parser.add_argument('--ring', type=Path, nargs='*', default=[], help="reference_check.py's JSON files")
     parser.add_argument('--single-chrono', type=Path, help="the store folder of the spec single_chrono")
     parser.add_argument('--single-bullet', type=Path, help="the store folder of the spec single_bullet_40")
+    parser.add_argument('--single-mujoco', type=Path, help="the store folder of the spec single_mujoco_40")
     args = parser.parse_args()
     rows = ring_rows(args.ring)
     for title, lines in (('(a) in phase', in_phase(rows)), ('(b) 0.1 period apart', offset(rows)),
                          ('every start', per_start(rows)),
-                         ('(c) a lone robot', lone(args.single_chrono, args.single_bullet))):
+                         ('(c) a lone robot', lone({'bullet': args.single_bullet, 'chrono': args.single_chrono,
+                                                    'mujoco': args.single_mujoco}))):
         print(f'#### {title}\n')
         print('\n'.join(lines))
         print()
