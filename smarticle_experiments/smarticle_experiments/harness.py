@@ -66,6 +66,12 @@ def run_spec(spec: ExperimentSpec, args: argparse.Namespace) -> tuple[list[Trial
     code = code_version()
     trials = spec.trials(code)
     store = ResultStore(args.out / spec.store)
+    from .trials import engine_missing
+
+    missing = engine_missing(spec.kind)   # checked once per spec, before any cluster starts
+    if missing is not None:
+        print(f'{spec.name}: skipped, {len(trials)} trials not run: {missing}')
+        return trials, store, code
     if not {t.key for t in trials} - store.done(args.retry_failed):
         summary = store.write_summary(store.records(t.key for t in trials), summary_name(spec))
         print(f'{spec.name}: {len(trials)} trials: {len(trials)} already stored, 0 done now; summary {summary}')

@@ -41,7 +41,7 @@ from typing import Any
 import yaml
 
 from .errors import SpecError
-from .configs import MUJOCO_FIELDS, NOISE_FIELDS, PHYSICS_FIELDS, ROBOT_FIELDS, noise_mapping
+from .configs import CHRONO_FIELDS, MUJOCO_FIELDS, NOISE_FIELDS, PHYSICS_FIELDS, ROBOT_FIELDS, noise_mapping
 from .trials import KINDS, resolve_kind, validate_params
 
 #: The sections a spec's ``report`` may name (``report.SECTIONS`` draws each; a test keeps the two equal).
@@ -155,7 +155,7 @@ def coerce(default: Any, value: Any) -> Any:
 
 def apply_point(base: Mapping[str, Any], point: Mapping[str, Any]) -> dict[str, Any]:
     """The base parameters with one grid point applied (``physics.X`` / ``robot.X`` / ``noise.X`` /
-    ``mujoco.X`` go into those mappings, copied: the base and the other points keep theirs)."""
+    ``mujoco.X`` / ``chrono.X`` go into those mappings, copied: the base and the other points keep theirs)."""
     # every mapping copied: a grid point's group.X must not reach the base (or the other points)
     params = {k: dict(v) if isinstance(v, Mapping) else v for k, v in base.items()}
     if 'physics' in base or 'robot' in base:
@@ -202,11 +202,11 @@ def _grid_block(name: str, kind: str, known: Any, block: Mapping[str, Any]) -> d
         group, dot, leaf = str(key).partition('.')
         if dot:
             allowed = {'physics': PHYSICS_FIELDS, 'robot': ROBOT_FIELDS, 'noise': NOISE_FIELDS,
-                       'mujoco': MUJOCO_FIELDS}.get(group)
+                       'mujoco': MUJOCO_FIELDS, 'chrono': CHRONO_FIELDS}.get(group)
             unsupported = known is not None and group != 'noise' and group not in known.defaults
             if allowed is None or leaf not in allowed or unsupported:
                 raise SpecError(f'{name}: unknown key grid.{key} '
-                                f'(not a physics, robot, noise or mujoco setting of kind {kind!r})')
+                                f'(not a physics, robot, noise, mujoco or chrono setting of kind {kind!r})')
         elif known is not None and (key not in known.defaults or key in ('physics', 'robot')):
             raise SpecError(f'{name}: unknown key grid.{key} for kind {kind!r}')
         if not isinstance(values, list):

@@ -27,6 +27,9 @@ from typing import Any
 
 import numpy as np
 from smarticle_sim.batch import Recording, run_trial
+from smarticle_sim.chrono_reference import (PAIR_CHRONO_DEFAULTS, SINGLE_CHRONO_DEFAULTS, ChronoSettings,
+                                            ChronoUnavailable, driver_path, pair_chrono_trial,
+                                            single_chrono_trial)
 from smarticle_sim.errors import SceneError, SimError
 from smarticle_sim.runner import ContactPeriods
 from smarticle_sim.mujoco_engine import MujocoSettings, run_mujoco
@@ -47,6 +50,8 @@ TrialFunction = Callable[[Mapping[str, Any], int], 'TrialResult | dict[str, Any]
 
 #: The trial kinds stepped by MuJoCo (``smarticle_sim.mujoco_engine``) instead of Bullet.
 MUJOCO_KINDS: frozenset[str] = frozenset({'pair_mujoco', 'single_mujoco'})
+#: The trial kinds run by the Chrono reference driver (``smarticle_sim.chrono_reference``), where it is built.
+CHRONO_KINDS: frozenset[str] = frozenset({'pair_chrono', 'single_chrono'})
 
 
 # ------------------------------------------------------------------ glider measurements
@@ -339,6 +344,12 @@ KINDS: dict[str, TrialKind] = {
                         'one robot alone, drift per cycle (P7)'),
     'single_mujoco': TrialKind(single_mujoco_trial, {**_COMMON, 'periods': 20.0, 'sample_every': 1, 'mujoco': {}},
                                'the single kind stepped by MuJoCo (cross-engine check)'),
+    'pair_chrono': TrialKind(pair_chrono_trial, PAIR_CHRONO_DEFAULTS,
+                             'two robots from pair coordinates in Chrono, the authors\' engine (cross-engine '
+                             'check; smarticle_sim.chrono_reference, needs the Chrono build)'),
+    'single_chrono': TrialKind(single_chrono_trial, SINGLE_CHRONO_DEFAULTS,
+                               'one robot alone in Chrono, drift per cycle (cross-engine check; needs the Chrono '
+                               'build)'),
     'p6': TrialKind(p6_trial, {'periods': 100.0, 'alpha_max_deg': 90.0, 'feedback': False, 'start': 'harvested',
                                'physics': {}, 'robot': {}, 'windows': {}, 'details': False},
                     'C2 pair of the feedback robot, open loop or feedback (P6; smarticle_experiments.p6)'),
@@ -376,6 +387,18 @@ def resolve_kind(kind: str) -> TrialKind | None:
     if ':' in kind:
         return None
     raise SpecError(f'kind {kind!r} is unknown; choose one of {", ".join(KINDS)} or give module:function')
+
+
+def engine_missing(kind: str) -> str | None:
+    """Why trials of ``kind`` cannot run on this machine (one line), or None if they can: the Chrono kinds
+    need the Chrono driver (tools/chrono_reference/build_chrono.sh)."""
+    if kind not in CHRONO_KINDS:
+        return None
+    try:
+        driver_path()
+    except ChronoUnavailable as exc:
+        return str(exc)
+    return None
 
 
 def trial_function(kind: str) -> TrialFunction:
@@ -429,6 +452,11 @@ def validate_params(kind: str, params: Mapping[str, Any]) -> None:
         if kind in MUJOCO_KINDS:
             try:
                 MujocoSettings(**dict(params.get('mujoco') or {}))
+            except SimError as exc:
+                raise SpecError(str(exc)) from None
+        if kind in CHRONO_KINDS:
+            try:
+                ChronoSettings(**dict(params.get('chrono') or {}))
             except SimError as exc:
                 raise SpecError(str(exc)) from None
         if kind == 'accuracy':

@@ -1,6 +1,7 @@
 """The Chrono reference check of a pair: the same start in Chrono (the authors' engine) and in Bullet.
 
-Runs two robots from pair coordinates for N periods in each engine asked for, one run after the other,
+Runs two robots from pair coordinates for N periods in each engine asked for (Chrono, Bullet, and MuJoCo with
+its default ``MujocoSettings``), one run after the other,
 and prints one markdown table row per run (end r and phi, net travel of the pair's centre, bound and
 colliding tails, trouble, wall time); ``--out`` also writes the rows as JSON.
 
@@ -30,7 +31,9 @@ from smarticle_common.gait import GaitConfig
 from smarticle_common.runs import save_npz
 
 from smarticle_sim.batch import run_trial
+from smarticle_sim.errors import SceneError
 from smarticle_sim.chrono_reference import ChronoSettings, ChronoUnavailable, pair_figures, run_chrono
+from smarticle_sim.mujoco_engine import MujocoSettings, run_mujoco
 from smarticle_sim.scenes import pair_scene
 from smarticle_sim.settings import SimConfig
 
@@ -39,8 +42,8 @@ COLUMNS = ('engine', 'step', 'phase2', 'seed', 'r_end_bl', 'phi_end_deg', 'trave
 
 
 def run_one(engine: str, step: float, phase2: float, seed: int, args: argparse.Namespace) -> dict[str, Any]:
-    """One pair run in ``engine`` ('chrono' or 'bullet') at ``step`` s; its figures."""
-    config = SimConfig() if engine == 'chrono' else SimConfig().with_physics(time_step=step)
+    """One pair run in ``engine`` ('chrono', 'bullet' or 'mujoco') at ``step`` s; its figures."""
+    config = SimConfig() if engine in ('chrono', 'mujoco') else SimConfig().with_physics(time_step=step)
     gait = GaitConfig.from_degrees(args.alpha_max, servo_speed=config.robot.servo_speed)
     scene = pair_scene(config.robot, gait, args.r, math.radians(args.theta), math.radians(args.phi),
                        (0.0, phase2), seed=seed)
@@ -48,6 +51,10 @@ def run_one(engine: str, step: float, phase2: float, seed: int, args: argparse.N
         rec = run_chrono(config, scene, args.periods, args.sample_every,
                          ChronoSettings(time_step=step, contact=args.contact),
                          fixed=(0,) if args.hold_first else ())
+    elif engine == 'mujoco':
+        if args.hold_first:
+            raise SystemExit('--hold-first is a Chrono option here')
+        rec = run_mujoco(config, scene, args.periods, args.sample_every, MujocoSettings(time_step=step))
     else:
         if args.hold_first:
             raise SystemExit('--hold-first is a Chrono option here')
@@ -55,7 +62,7 @@ def run_one(engine: str, step: float, phase2: float, seed: int, args: argparse.N
     if args.keep is not None:
         save_npz(rec, args.keep / f'{engine}_{step:.3g}_phase{phase2:g}_seed{seed}.npz')
     figures = pair_figures(rec, gait.period, config.physics.control_tick * args.sample_every, R_BIND_BL, 10)
-    if engine == 'bullet':
+    if engine != 'chrono':
         figures['wall_time_s'] = None
     return {'engine': engine, 'step': step, 'phase2': phase2, 'seed': seed, **figures}
 
@@ -77,7 +84,7 @@ def main() -> int:
     parser.add_argument('--alpha-max', type=float, default=90.0, help='gait amplitude (deg)')
     parser.add_argument('--periods', type=float, default=40.0)
     parser.add_argument('--sample-every', type=int, default=3, help='control ticks (1/60 s) between samples')
-    parser.add_argument('--engines', nargs='+', choices=('chrono', 'bullet'), default=['chrono', 'bullet'])
+    parser.add_argument('--engines', nargs='+', choices=('chrono', 'bullet', 'mujoco'), default=['chrono', 'bullet'])
     parser.add_argument('--chrono-steps', type=float, nargs='+', default=[1e-4], help='Chrono steps (s)')
     parser.add_argument('--bullet-steps', type=int, nargs='+', default=[960, 9600],
                         help='Bullet steps as steps per second')
@@ -93,12 +100,16 @@ def main() -> int:
     for phase2 in args.phase2:
         for seed in args.seeds:
             for engine in args.engines:
-                steps = args.chrono_steps if engine == 'chrono' else [1.0 / n for n in args.bullet_steps]
+                steps = {'chrono': args.chrono_steps, 'bullet': [1.0 / n for n in args.bullet_steps],
+                         'mujoco': [MujocoSettings().time_step]}[engine]
                 for step in steps:
                     try:
                         row = run_one(engine, step, phase2, seed, args)
                     except ChronoUnavailable as exc:
                         print(f'skipped: {exc}', file=sys.stderr)
+                        break
+                    except SceneError as exc:   # the robots overlap at this start: not run in any engine
+                        print(f'inadmissible start (not run): {exc}', file=sys.stderr)
                         break
                     rows.append(row)
                     print('| ' + ' | '.join(f'{row[c]:.3g}' if c == 'step' else cell(row[c]) for c in COLUMNS)
