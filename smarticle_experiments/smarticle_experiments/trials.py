@@ -29,7 +29,7 @@ import numpy as np
 from smarticle_sim.batch import Recording, run_trial
 from smarticle_sim.chrono_reference import (PAIR_CHRONO_DEFAULTS, SINGLE_CHRONO_DEFAULTS, ChronoSettings,
                                             ChronoUnavailable, driver_path, pair_chrono_trial,
-                                            single_chrono_trial)
+                                            single_chrono_trial, trailing_true)
 from smarticle_sim.errors import SceneError, SimError
 from smarticle_sim.runner import ContactPeriods
 from smarticle_sim.mujoco_engine import MujocoSettings, run_mujoco
@@ -144,16 +144,6 @@ def pair_start(p: Mapping[str, Any], seed: int) -> tuple[float, float, float]:
             float(p['phi_deg'] + jitter[2] * u[2]))
 
 
-def _tail(flags: Sequence[bool]) -> int:
-    """How many of the last entries of ``flags`` are true in a row."""
-    tail = 0
-    for flag in reversed(flags):
-        if not flag:
-            break
-        tail += 1
-    return tail
-
-
 def pair_trial(p: Mapping[str, Any], seed: int) -> PairResult | InadmissiblePairResult:
     """P4/P5: two robots from pair coordinates; binding at the end, travel, and the pair's gliders."""
     return _pair(p, seed, mujoco=False)
@@ -196,7 +186,7 @@ def _pair(p: Mapping[str, Any], seed: int, mujoco: bool) -> PairResult | Inadmis
     bound = [bool(touching[q * per:(q + 1) * per].any() or (r_all[q * per:(q + 1) * per] < p['r_bind_bl']).any())
              for q in range(len(touching) // per)]
     colliding = [q in touched for q in range(len(bound))]
-    tail, colliding_tail = _tail(bound), _tail(colliding)
+    tail, colliding_tail = trailing_true(bound), trailing_true(colliding)
     com = rec.poses[::per, :, :2].mean(axis=1) / bl
     phi_end = (rec.poses[-1, 1, 2] - rec.poses[-1, 0, 2]) % (2.0 * math.pi)
     out.update(start, admissible=True, bound_tail_periods=tail,

@@ -28,7 +28,7 @@ import math
 import os
 import subprocess
 import tempfile
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import Any
@@ -398,11 +398,12 @@ def pair_figures(rec: Recording, period: float, sample_interval: float, r_bind_b
     com = rec.poses[:, :, :2].mean(axis=1) / bl
     travel = float(np.linalg.norm(com[whole * per] - com[0])) if whole else 0.0
     _, _, phi_end = one_pair(rec.poses[-1, 0], rec.poses[-1, 1])
+    bound_tail_periods = trailing_true(bound)
     return {'trouble': rec.trouble, 'periods_run': whole, 'r_end_bl': float(r_all[-1]),
             'phi_end_deg': math.degrees(phi_end), 'travel_w': travel,
             'travel_w_per_100': 100.0 * travel / whole if whole else 0.0,
-            'bound_tail_periods': _tail(bound), 'colliding_tail_periods': _tail(colliding),
-            'bound_at_end': _tail(bound) >= bound_tail,
+            'bound_tail_periods': bound_tail_periods, 'colliding_tail_periods': trailing_true(colliding),
+            'bound_at_end': bound_tail_periods >= bound_tail,
             'peak_tilt_deg': _number(rec.meta.get('peak_tilt_deg')),
             'peak_overlap_mm': _number(rec.meta.get('peak_overlap_mm')),
             'wall_time_s': _number(rec.meta.get('wall_time_s'))}
@@ -413,8 +414,8 @@ def _number(value: Any) -> float | None:
     return float(value) if isinstance(value, (int, float)) and math.isfinite(value) else None
 
 
-def _tail(flags: list[bool]) -> int:
-    """How many of the last entries of ``flags`` are true in a row."""
+def trailing_true(flags: Sequence[bool]) -> int:
+    """How many of the last entries of ``flags`` are true in a row (a pair's bound or colliding periods at the end)."""
     tail = 0
     for flag in reversed(flags):
         if not flag:

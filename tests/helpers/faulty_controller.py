@@ -12,11 +12,10 @@ import math
 import sys
 from typing import Any
 
-import rclpy
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.time import Time
 from smarticle_common import topics
+from smarticle_common.node import run_node
 
 
 class FaultyController(Node):
@@ -58,17 +57,7 @@ class FaultyController(Node):
 
 
 def main() -> None:
-    rclpy.init(args=sys.argv)
-    node = None
-    try:
-        node = FaultyController()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
+    raise SystemExit(run_node(FaultyController, 'faulty_controller', sys.argv))
 
 
 if __name__ == '__main__':
