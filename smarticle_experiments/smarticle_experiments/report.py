@@ -537,13 +537,13 @@ def setting_cells(setting: tuple[tuple[str, Any], ...], keys: Sequence[str]) -> 
 
 
 #: ``step_convergence``: a figure counts as converged at a step if it is within this fraction of its value at
-#: the finest step of the spec, or within the two values' combined 95 % half-widths (issue #11, item 1).
+#: the finest step of the spec, or within the two values' combined 95 % half-widths.
 CONVERGED_WITHIN = 0.10
 
 
 def section_step_convergence(ctx: Context) -> list[str]:
     """A bound pair's mean r and travel per 100 periods against the time step, the solver iterations and the
-    solver's residual threshold (issue #11, item 1); the reference is the finest step with the most iterations
+    solver's residual threshold; the reference is the finest step with the most iterations
     and the strictest threshold.
 
     A grid over more than the solver (e.g. ``physics.restitution``) gives one block of rows per setting, each

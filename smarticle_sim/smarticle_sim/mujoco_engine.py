@@ -1,7 +1,7 @@
 """The same scene in a second physics engine (MuJoCo): a cross-check of what Bullet's contact model does.
 
 PyBullet is the simulation of this project. This module steps a ``Scene`` in MuJoCo instead, to tell
-what the robots, their gait and their start do from what Bullet's rigid contacts do (issue #11: in Bullet
+what the robots, their gait and their start do from what Bullet's rigid contacts do (in Bullet
 two robots in phase never glide; is that Bullet's?). It is built from the same facts and returns the same
 ``Recording`` as ``batch.run_trial``, so the glider analysis and the experiment reports read it unchanged.
 
