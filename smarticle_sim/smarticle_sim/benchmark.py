@@ -15,9 +15,8 @@ import time
 from dataclasses import dataclass
 from typing import Callable
 
-import pybullet
-
 from .batch import run_trial, scene_period
+from .quiet import pybullet
 from .scenes import Scene
 from .settings import SimConfig
 from .physics import ARM_JOINTS, Physics

@@ -21,10 +21,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import pybullet
 from smarticle_common.facts import RobotSpec
 
 from smarticle_sim.physics import configure_engine, quiet_client, robot_link_contact
+from smarticle_sim.quiet import pybullet
 from smarticle_sim.settings import PhysicsConfig
 
 

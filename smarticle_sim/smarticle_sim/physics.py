@@ -21,17 +21,15 @@ computed only when asked for.
 from __future__ import annotations
 
 import math
-import os
-import sys
 from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
-import pybullet
-from pybullet_utils.bullet_client import BulletClient
 from smarticle_common.facts import RobotSpec
 from smarticle_common.poses import body_headings_and_tilts
 from smarticle_common.topics import FSR_FACES
+
+from smarticle_sim.quiet import BulletClient, pybullet, silenced_output
 
 from .settings import AUTHORS_ARM_MASS, AUTHORS_LINK_DENSITY, PhysicsConfig, SimConfig
 from .errors import SceneError, SimError
@@ -625,16 +623,5 @@ def configure_engine(client: BulletClient, physics: PhysicsConfig, n_robots: int
 
 def quiet_client() -> BulletClient:
     """A DIRECT BulletClient, with the engine's start-up chatter on stdout ('argv[0]=') silenced."""
-    try:
-        fd = sys.stdout.fileno()
-    except (AttributeError, OSError, ValueError):   # stdout replaced by a non-file (e.g. captured)
+    with silenced_output():
         return BulletClient(connection_mode=pybullet.DIRECT)
-    sys.stdout.flush()
-    saved = os.dup(fd)
-    try:
-        with open(os.devnull, 'wb') as devnull:
-            os.dup2(devnull.fileno(), fd)
-            return BulletClient(connection_mode=pybullet.DIRECT)
-    finally:
-        os.dup2(saved, fd)
-        os.close(saved)
