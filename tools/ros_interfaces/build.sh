@@ -38,8 +38,7 @@ steps() {
   local bvenv="$BUILD/venv" py ver inc np machine
   echo "== step: build environment (requirements-build.txt)" >&2
   "$VENV/bin/python" -m venv "$bvenv"
-  "$bvenv/bin/python" -m pip install -q --upgrade pip
-  "$bvenv/bin/python" -m pip install -q -r "$HERE/requirements-build.txt"
+  "$bvenv/bin/python" -m pip install -q --no-compile -r "$HERE/requirements-build.txt"
   py="$bvenv/bin/python"
   ver="$("$py" -c 'import sys; print(f"{sys.version_info[0]}.{sys.version_info[1]}")')"
 
