@@ -35,7 +35,7 @@ fi
 want="$(stamp_of)"
 have="$(cat "$VENV/.smarticle-stamp" 2>/dev/null || true)"
 if [ "$want" != "$have" ]; then
-  echo "[bootstrap] installing dependencies into $VENV (first run takes about a minute)"
+  echo "[bootstrap] installing dependencies into $VENV (the first run takes a few minutes)"
   "$VENV/bin/python" -m pip install -q --upgrade pip
   "$VENV/bin/python" -m pip install -q -r "$ROOT/requirements-dev.txt"
   for p in "${PACKAGES[@]}"; do
