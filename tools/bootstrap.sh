@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Create (or refresh) the project's virtual environment in .venv and install everything into it:
 # the PyPI dependencies from requirements-dev.txt, the ROS 2 packages of the stack and the example controller
-# (examples/), editable.
+# (examples/), editable, and tf2_msgs (the /tf message, not on PyPI), generated from tools/ros_interfaces unless
+# tf2_msgs already imports (a ROS install brings its own).
 # Sourced by demo.sh and test.sh; safe to run again (it only reinstalls when the project files change).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -12,7 +13,7 @@ PACKAGES=(smarticle_common smarticle_driver smarticle_sim smarticle_feedback sma
 
 stamp_of() {
   # everything that changes what gets installed
-  (cd "$ROOT" && cat requirements.txt requirements-dev.txt tools/bootstrap.sh \
+  (cd "$ROOT" && cat requirements.txt requirements-dev.txt tools/bootstrap.sh tools/ros_interfaces/build.sh \
      "${PACKAGES[@]/%//setup.py}" "${PACKAGES[@]/%//setup.cfg}" | sha256sum | cut -d' ' -f1)
 }
 
@@ -34,13 +35,15 @@ fi
 want="$(stamp_of)"
 have="$(cat "$VENV/.smarticle-stamp" 2>/dev/null || true)"
 if [ "$want" != "$have" ]; then
-  echo "[bootstrap] installing dependencies into $VENV (first run takes about a minute)"
+  echo "[bootstrap] installing dependencies into $VENV (the first run takes a few minutes)"
   "$VENV/bin/python" -m pip install -q --upgrade pip
   "$VENV/bin/python" -m pip install -q -r "$ROOT/requirements-dev.txt"
   for p in "${PACKAGES[@]}"; do
     "$VENV/bin/python" -m pip install -q --no-deps --no-build-isolation \
       --config-settings editable_mode=compat -e "$ROOT/$p"
   done
+  # a failed build says so in one line and leaves the stack without /tf; the set-up goes on
+  bash "$ROOT/tools/ros_interfaces/build.sh" "$VENV" || true
   echo "$want" > "$VENV/.smarticle-stamp"
   echo "[bootstrap] environment ready"
 fi

@@ -7,7 +7,8 @@ to Foxglove).
 ``RobotModelPublisher`` is what a node (the sim bridge, the tracker) holds: it latches each robot's URDF on
 ``/smarticle_<k>/robot_description`` (std_msgs/String, transient local like robot_state_publisher; RViz's
 RobotModel display takes the topic and the TF prefix ``smarticle_<k>``) and publishes the transforms on
-``/tf`` as tf2_msgs/TFMessage when tf2_msgs is importable (any ROS install has it). Without tf2_msgs it says
+``/tf`` as tf2_msgs/TFMessage when tf2_msgs is importable (a ROS install has it; on a pip-only install the
+set-up generates it into the virtual environment, tools/ros_interfaces). Without tf2_msgs it says
 once in the log, and in every status of the node's /diagnostics (``status()``), that /tf is off.
 
 No rclpy import: the publisher is handed a node. Metres, radians; a robot whose pose is not finite (not seen
@@ -25,7 +26,7 @@ from . import topics
 from .facts import RobotSpec
 from .robot_model import Transform, robot_frames, urdf
 
-#: The TF topic and its message type (tf2_msgs, part of every ROS install; not on PyPI).
+#: The TF topic and its message type (tf2_msgs: a ROS install's, or generated at set-up; not on PyPI).
 TF_TOPIC = '/tf'
 TF_TYPE = 'tf2_msgs/msg/TFMessage'
 
@@ -93,8 +94,9 @@ class RobotModelPublisher:
         self.TFMessage = tf_message_class()
         self.tf_pub = None
         if self.TFMessage is None:
-            node.get_logger().warning(f'{TF_TOPIC} is off: tf2_msgs is not installed (it comes with any ROS '
-                                      f'install); /smarticle_<k>/robot_description is published')
+            node.get_logger().warning(f'{TF_TOPIC} is off: tf2_msgs is not installed (a ROS install has it; '
+                                      f'on a pip-only install the set-up builds it: see its output); '
+                                      f'/smarticle_<k>/robot_description is published')
         else:
             self.tf_pub = node.create_publisher(self.TFMessage, TF_TOPIC, topics.qos_profile(topics.Qos.COMMAND))
 
