@@ -64,7 +64,7 @@ def test_the_node_list_is_every_node_executable() -> None:
 def test_every_console_script_answers_version_and_help(script: str) -> None:
     version = run(script, '--version')
     assert version.returncode == 0, version.stderr
-    assert re.fullmatch(r'\S+ \d+\.\d+\.\d+\S*\n', version.stdout), version.stdout
+    assert re.fullmatch(rf'{re.escape(script)} \d+\.\d+\.\d+\S*\n', version.stdout), version.stdout   # the name typed
     shown = run(script, '--help')
     assert shown.returncode == 0, shown.stderr
     assert 'usage' in shown.stdout.lower()

@@ -52,9 +52,9 @@ LIMITS = ("[demo] not reproduced: the paper's robots start in phase and form tra
           f'exactly in phase settle still, and a halt does not hold a C2 pair together: {PHYSICS_DOC}')
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """Command-line options of the demo."""
-    parser = argparse.ArgumentParser(prog='demo.sh', description=__doc__.split('\n')[0] if __doc__ else None)
+def build_parser(prog: str = 'smarticle-demo') -> argparse.ArgumentParser:
+    """Command-line options of the demo; ``prog`` is the name the user typed (``demo.sh`` or ``smarticle-demo``)."""
+    parser = argparse.ArgumentParser(prog=prog, description=__doc__.split('\n')[0] if __doc__ else None)
     add_version(parser, 'smarticle_bringup')
     parser.add_argument('--seed', type=int, default=1,
                         help='seed of both starts (the jitter of the pair coordinates; default 1)')
@@ -421,7 +421,7 @@ def report_part(part: Part, run: StackRun, out: Path) -> tuple[Any, list[str]]:
     return report.analysis, [shown(p) for p in written]
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, prog: str = 'smarticle-demo') -> int:
     """Run the demo; return the exit code."""
     import matplotlib
 
@@ -430,7 +430,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from .demo_figures import AnimatedPart, GliderSpan, write_animation
 
-    args = build_parser().parse_args(argv)
+    args = build_parser(prog).parse_args(argv)
     if args.robots < 1 or args.periods <= 0 or args.feedback_periods <= 0 or args.frame_step <= 0:
         print('demo: --robots must be >= 1, --periods, --feedback-periods and --frame-step > 0', file=sys.stderr)
         return 2
@@ -471,9 +471,9 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def entry() -> None:
-    """Console-script entry point."""
+    """Console-script entry point (``smarticle-demo``)."""
     raise SystemExit(main())
 
 
-if __name__ == '__main__':
-    entry()
+if __name__ == '__main__':   # run by demo.sh
+    raise SystemExit(main(prog='demo.sh'))
