@@ -16,7 +16,8 @@ its non-smooth one (NSC); the arms on rigid speed motors whose speed is a functi
 square gait's open-loop stroke at the gait's servo speed (no angle feedback, no torque limit). The plate
 is a box of the robots' material (the authors' floor) with ``PhysicsConfig.friction_body_plate``.
 
-Not modelled: noise, FSR forces, feedback and halts, starts from a running trial (``RobotState``).
+Not modelled: noise, FSR forces, feedback and halts, starts from a running trial (``RobotState``) with
+their velocities; ``at_rest_scene`` starts such a scene at rest when its velocities are negligible (a held pair).
 A run stops early, with ``meta['trouble']`` set, when the state is not finite, a body tips past
 ``PhysicsConfig.max_tilt`` or leaves the plate.
 """
