@@ -16,7 +16,8 @@ its non-smooth one (NSC); the arms on rigid speed motors whose speed is a functi
 square gait's open-loop stroke at the gait's servo speed (no angle feedback, no torque limit). The plate
 is a box of the robots' material (the authors' floor) with ``PhysicsConfig.friction_body_plate``.
 
-Not modelled: noise, FSR forces, feedback and halts, starts from a running trial (``RobotState``).
+Not modelled: noise, FSR forces, feedback and halts, starts from a running trial (``RobotState``) with
+their velocities; ``at_rest_scene`` starts such a scene at rest when its velocities are negligible (a held pair).
 A run stops early, with ``meta['trouble']`` set, when the state is not finite, a body tips past
 ``PhysicsConfig.max_tilt`` or leaves the plate.
 """
@@ -226,6 +227,33 @@ def read_recording(path: str | Path, n_robots: int, body_length: float,
     contacts = data[:, 1 + ROBOT_COLUMNS * n_robots:].reshape(rows, n_robots, n_robots) > 0.5
     return Recording(data[:, 0].copy(), poses, per_robot[:, :, 7:9].copy(),
                      np.zeros((rows, n_robots, len(FSR_FACES))), contacts, float(body_length), dict(meta or {}))
+
+
+#: A start taken from a running trial may have arms this far (rad) from where their gaits start and still be
+#: started at rest there by ``at_rest_scene``: a servo settled on its corner, to the solver's rounding.
+AT_REST_ARM_TOLERANCE = 1e-3
+
+
+def at_rest_scene(scene: Scene, arm_tolerance: float = AT_REST_ARM_TOLERANCE) -> tuple[Scene, float]:
+    """``scene`` with every robot at rest, flat on the plate: each robot's pose (x, y, heading) and gait kept, its
+    running state (``RobotState``: height, tilt, velocities) dropped and its arms put where its gait starts. For
+    a start taken from a running trial at a period boundary whose velocities are negligible (a held pair), so
+    that the Chrono driver, which starts robots at rest, can run it. Returns the scene and the largest arm
+    correction (rad). SceneError if a robot has no gait or an arm is more than ``arm_tolerance`` rad from
+    its gait's start."""
+    robots = []
+    largest = 0.0
+    for k, robot in enumerate(scene.robots):
+        if robot.gait is None:
+            raise SceneError(f'robot {k} has no gait: an at-rest start puts the arms where the gait starts')
+        a1, a2 = open_loop_angles(robot.gait, robot.gait.phase)
+        off = max(abs(a1 - robot.alpha1), abs(a2 - robot.alpha2))
+        if not off <= arm_tolerance:
+            raise SceneError(f'robot {k}: arms at ({robot.alpha1:.4f}, {robot.alpha2:.4f}) rad are {off:.2g} rad '
+                             f'from where its gait starts ({a1:.4f}, {a2:.4f}), more than {arm_tolerance:g}')
+        largest = max(largest, off)
+        robots.append(RobotPlacement(robot.x, robot.y, robot.heading, a1, a2, robot.gait))
+    return replace(scene, robots=tuple(robots)), largest
 
 
 def run_chrono(config: SimConfig, scene: Scene, periods: float, sample_every: int,
