@@ -200,7 +200,6 @@ def offset(rows: dict[tuple[str, float], list[dict[str, Any]]]) -> list[str]:
             ratio = (float(np.mean(speeds[f]) / np.mean(speeds['bullet'])) if speeds[f] and speeds['bullet']
                      else math.nan)
             verdicts.append(p >= FISHER_P and abs(ratio - 1.0) <= CONVERGED_SPEED)
-            lines.append(f'- {f} against bullet (1/960 s): share Fisher p = {p:.3g}, gliders\' speed x {ratio:.2f}.')
         lines.append(f'- Bullet at 1/960 s on the ring: **{"converged" if all(verdicts) else "not converged"}** '
                      f'(share agrees at both finer steps and speed within {100 * CONVERGED_SPEED:.0f} %).')
     return lines
