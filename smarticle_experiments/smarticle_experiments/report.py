@@ -455,14 +455,17 @@ def section_basin(ctx: Context) -> list[str]:
             est = wilson(k, len(starts))
             cells.append(f'{k}/{len(starts)} ({est.low:.2f}-{est.high:.2f})' if est.n else '-')
         starts = [outcome for t, outcome in judged if member(*angles(t))]
-        cells += [f'{starts.count(kind)}/{len(starts)}' for kind in ('repelled', 'neither')]
+        for kind in ('repelled', 'neither'):
+            est = wilson(starts.count(kind), len(starts))
+            cells.append(f'{starts.count(kind)}/{len(starts)} ({est.low:.2f}-{est.high:.2f})' if est.n else '-')
         table.append(f'| {name} | ' + ' | '.join(cells) + ' |')
     return [f'{len(rows)} starts, {len(adm)} admissible: {counts["bound"]} bound (in contact in each of the last '
             f'{tail} periods: the pair keeps colliding to the end), {counts["repelled"]} repelled (centres farther '
             f'apart at the end than twice the robot\'s reach: no shape can touch), {counts["neither"]} neither '
             f'(within reach, not colliding every period). By the earlier rule (r < r_bind or contact in each of '
             f'the last {tail} periods) {earlier} were bound.', '',
-            'Bound starts of each class out of its admissible ones (95 % Wilson interval); theta on a quadrant '
+            'Bound, repelled and neither starts of each class out of its admissible ones (95 % Wilson interval); '
+            'theta on a quadrant '
             'boundary counts in neither quadrant pair:', '', *table, '', '![basin](basin.png)', '',
             '![basin, polar](basin_polar.png)']
 

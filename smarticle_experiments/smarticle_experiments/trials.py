@@ -145,7 +145,8 @@ def pair_start(p: Mapping[str, Any], seed: int) -> tuple[float, float, float]:
 
 
 def pair_trial(p: Mapping[str, Any], seed: int) -> PairResult | InadmissiblePairResult:
-    """P4/P5: two robots from pair coordinates; binding at the end, travel, and the pair's gliders."""
+    """P4/P5: two robots from pair coordinates; binding at the end, travel, and the pair's gliders.
+    ``hold_first``: robot 1's body held in place, its arms still following the gait (P4 read literally)."""
     return _pair(p, seed, mujoco=False)
 
 
@@ -158,6 +159,9 @@ def pair_mujoco_trial(p: Mapping[str, Any], seed: int) -> PairResult | Inadmissi
 
 def _pair(p: Mapping[str, Any], seed: int, mujoco: bool) -> PairResult | InadmissiblePairResult:
     """The pair kind in either engine."""
+    if mujoco and p['hold_first']:
+        raise SpecError('hold_first: the MuJoCo pair kind has no held robot; use the pair kind (Bullet) or '
+                        'pair_chrono')
     config = config_of(p)
     gait = make_gait(config, p['alpha_max_deg'], p['servo_speed'])
     r, theta, phi = pair_start(p, seed)
@@ -165,7 +169,8 @@ def _pair(p: Mapping[str, Any], seed: int, mujoco: bool) -> PairResult | Inadmis
     try:
         scene = pair_scene(config.robot, gait, r, math.radians(theta), math.radians(phi),
                            (0.0, float(p['phase2'])), seed=seed,
-                           alpha_max2=gait.alpha_max + math.radians(float(p['alpha2_delta_deg'])))
+                           alpha_max2=gait.alpha_max + math.radians(float(p['alpha2_delta_deg'])),
+                           hold_first=bool(p['hold_first']))
     except SceneError as exc:
         return InadmissiblePairResult(**start, admissible=False, why=str(exc), trouble='', gliders=[])
     per = max(1, round(gait.period / (config.physics.control_tick * int(p['sample_every']))))
@@ -318,7 +323,7 @@ _GLIDERS: dict[str, Any] = {'min_periods': 30, 'r_bind_bl': 1.6, 'isolation_w': 
 #: The pair kinds' parameters (Bullet's and MuJoCo's take the same).
 _PAIR: dict[str, Any] = {**_COMMON, **_GLIDERS, 'periods': 75.0, 'r_bl': 1.3, 'theta_deg': 0.0, 'phi_deg': 180.0,
                          'phase2': 0.0, 'start_jitter': [0.0, 0.0, 0.0], 'sample_every': 2, 'min_periods': 10,
-                         'bound_tail': 5, 'alpha2_delta_deg': 0.0}
+                         'bound_tail': 5, 'alpha2_delta_deg': 0.0, 'hold_first': False}
 
 #: The physics study's kinds: flat ``settings`` (physics_study.split_settings) and a ``label`` for its tables.
 _STUDY: dict[str, Any] = {'settings': {}, 'label': 'shipped'}
@@ -439,6 +444,9 @@ def validate_params(kind: str, params: Mapping[str, Any]) -> None:
             make_gait(make_config(str(params['preset']), {}, {}), params['alpha_max_deg'])
             return
         config = config_of(params)
+        if kind == 'pair_mujoco' and params.get('hold_first'):
+            raise SpecError('hold_first: the MuJoCo pair kind has no held robot; use the pair kind (Bullet) or '
+                            'pair_chrono')
         if kind in MUJOCO_KINDS:
             try:
                 MujocoSettings(**dict(params.get('mujoco') or {}))

@@ -115,7 +115,8 @@ def run_trial(config: SimConfig, scene: Scene, periods: float, sample_every: int
         'fsr_faces': list(FSR_FACES), 'trouble': '',
         'initial': [{'x': r.x, 'y': r.y, 'heading': r.heading, 'alpha1': r.alpha1, 'alpha2': r.alpha2,
                      'phase': r.gait.phase if r.gait else None,
-                     'alpha_max': r.gait.alpha_max if r.gait else None} for r in scene.robots],
+                     'alpha_max': r.gait.alpha_max if r.gait else None, **({'held': True} if r.held else {})}
+                    for r in scene.robots],
     }
     with Physics(config, scene) as physics:
         gaits = GaitController.for_scene(physics)

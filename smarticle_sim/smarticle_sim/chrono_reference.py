@@ -165,11 +165,12 @@ def _robot_links(config: SimConfig) -> tuple[dict[str, Any], list[dict[str, Any]
 def scene_document(config: SimConfig, scene: Scene, duration: float, record_interval: float,
                    settings: ChronoSettings, fixed: Iterable[int] = ()) -> dict[str, Any]:
     """The JSON scene the driver reads: ``scene``'s robots for ``duration`` s, a sample every ``record_interval``
-    s; robots in ``fixed`` have their body held in place (their arms still move). SceneError / SimError on a
+    s; robots in ``fixed`` (and those ``RobotPlacement.held``) have their body held in place (their arms still
+    move). SceneError / SimError on a
     scene the driver cannot run."""
     spec, ph = config.robot, config.physics
     scene.validate(spec, ph.plate_size)
-    held = set(fixed)
+    held = set(fixed) | {k for k, robot in enumerate(scene.robots) if robot.held}
     if not held <= set(range(len(scene.robots))):
         raise SceneError(f'fixed robots {sorted(held)} are not all in the scene of {len(scene.robots)} robots')
     steps = record_interval / settings.time_step

@@ -161,6 +161,9 @@ def build_model(config: SimConfig, scene: Scene, settings: MujocoSettings) -> mu
     if ph.mass_model != 'uniform':
         raise SimError(f'PhysicsConfig.mass_model: the MuJoCo engine builds the uniform robot only, '
                        f'got {ph.mass_model!r}')
+    if any(robot.held for robot in scene.robots):
+        raise SimError('the MuJoCo engine holds no robot in place (RobotPlacement.held); run a held robot in '
+                       'Bullet or Chrono')
     w, d, h = spec.body_width, spec.body_depth, spec.body_height
     half_l, half_t, half_h = spec.arm_length / 2.0, spec.arm_thickness / 2.0, spec.arm_height / 2.0
     arm_z = spec.arm_clearance + spec.arm_height / 2.0 - h / 2.0

@@ -137,8 +137,10 @@ class Physics:
             state = placement.state
             z = h / 2.0 if state is None else state.z
             yaw = placement.heading - math.pi / 2.0
+            # A held body has no mass: Bullet makes it the fixed base of its multibody, so it neither moves
+            # nor tips, other robots collide with it as with a wall, and its arms still turn on their joints.
             body = c.createMultiBody(
-                spec.body_mass, body_shape, body_visual, [placement.x, placement.y, z],
+                0.0 if placement.held else spec.body_mass, body_shape, body_visual, [placement.x, placement.y, z],
                 c.getQuaternionFromEuler([0.0, 0.0, yaw]) if state is None else state.orientation,
                 linkMasses=list(arm_masses(spec, ph.mass_model)), linkCollisionShapeIndices=arm_shapes,
                 linkVisualShapeIndices=arm_visuals,
@@ -156,8 +158,9 @@ class Physics:
                                  rollingFriction=0.0, spinningFriction=0.0, jointDamping=0.0, **link_contact)
             if ph.mass_model == 'authors':
                 for link, inertia in enumerate(authors_inertias(spec)):
-                    c.changeDynamics(body, link - 1, localInertiaDiagonal=inertia)
-            if ph.tilt_inertia_scale != 1.0 or ph.yaw_inertia_scale != 1.0:
+                    if link > 0 or not placement.held:
+                        c.changeDynamics(body, link - 1, localInertiaDiagonal=inertia)
+            if (ph.tilt_inertia_scale != 1.0 or ph.yaw_inertia_scale != 1.0) and not placement.held:
                 ixx, iyy, izz = c.getDynamicsInfo(body, -1)[2]
                 c.changeDynamics(body, -1, localInertiaDiagonal=[ixx * ph.tilt_inertia_scale,
                                                                  iyy * ph.tilt_inertia_scale,
@@ -174,7 +177,8 @@ class Physics:
             else:   # a start taken from a running trial: its velocities too
                 c.resetJointState(body, ARM_JOINTS[0], placement.alpha1, targetVelocity=state.arm_velocities[0])
                 c.resetJointState(body, ARM_JOINTS[1], placement.alpha2, targetVelocity=state.arm_velocities[1])
-                c.resetBaseVelocity(body, linearVelocity=state.velocity, angularVelocity=state.angular_velocity)
+                if not placement.held:
+                    c.resetBaseVelocity(body, linearVelocity=state.velocity, angularVelocity=state.angular_velocity)
             ids.append(body)
         self.body_ids: tuple[int, ...] = tuple(ids)
         self._robot_of_body = {b: k for k, b in enumerate(ids)}
@@ -360,7 +364,7 @@ class Physics:
                                tuple(float(v) for v in lin), tuple(float(w) for w in ang),  # type: ignore[arg-type]
                                (float(v1), float(v2)))
             out.append(RobotPlacement(float(pos[k, 0]), float(pos[k, 1]), float(heading[k]), float(a1), float(a2),
-                                      self.scene.robots[k].gait, state))
+                                      self.scene.robots[k].gait, state, self.scene.robots[k].held))
         return tuple(out)
 
     def body_xy(self) -> np.ndarray:

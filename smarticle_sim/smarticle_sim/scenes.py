@@ -62,6 +62,9 @@ class RobotPlacement:
     alpha2: float = 0.0
     gait: GaitConfig | None = None   # None: the robot follows external joint commands
     state: RobotState | None = None  # None: at rest, flat on the plate
+    #: True: the body is held in place (it neither moves nor tips; contacts act on it but cannot move it),
+    #: its arms still turn. Bullet gives a held body no mass, a fixed base (``Physics``).
+    held: bool = False
 
     def rects(self, spec: RobotSpec) -> tuple[Rect, Rect, Rect]:
         """Footprint rectangles (body, arm 1, arm 2) of this placement."""
@@ -114,10 +117,10 @@ def start_angles(gait: GaitConfig) -> tuple[float, float]:
     return open_loop_angles(gait, gait.phase)
 
 
-def _placement(x: float, y: float, heading: float, gait: GaitConfig) -> RobotPlacement:
-    """A placement whose arms start where ``gait`` starts."""
+def _placement(x: float, y: float, heading: float, gait: GaitConfig, held: bool = False) -> RobotPlacement:
+    """A placement whose arms start where ``gait`` starts (``held``: its body held in place)."""
     a1, a2 = start_angles(gait)
-    return RobotPlacement(float(x), float(y), float(heading), a1, a2, gait)
+    return RobotPlacement(float(x), float(y), float(heading), a1, a2, gait, held=held)
 
 
 def hex_points(n: int) -> np.ndarray:
@@ -174,7 +177,7 @@ def dense_scene(spec: RobotSpec, gait: GaitConfig, n: int = 7, seed: int = 0,
 def pair_scene(spec: RobotSpec, gait: GaitConfig, r: float, theta: float, phi: float,
                phases: tuple[float, float] = (0.0, 0.0), heading1: float = math.pi / 2.0,
                centre: tuple[float, float] = (0.0, 0.0), seed: int | None = None,
-               alpha_max2: float | None = None) -> Scene:
+               alpha_max2: float | None = None, hold_first: bool = False) -> Scene:
     """Two robots at pair coordinates (r in BL, theta, phi in rad) with gait phases ``phases``.
 
     Robot 1 sits at ``centre`` with normal ``heading1``; robot 2's centre is r BL away in the direction
@@ -182,7 +185,9 @@ def pair_scene(spec: RobotSpec, gait: GaitConfig, r: float, theta: float, phi: f
     and its normal is robot 1's turned by phi. Nothing here is random; ``seed`` is the trial's seed the
     scene carries, from which the noise with a cause draws (``NoiseConfig.trial_seed``).
     ``alpha_max2`` (rad) gives robot 2 its own amplitude (default: the gait's), two robots whose servos
-    turn their arms unequally far. Raises SceneError if the two overlap in their starting shapes.
+    turn their arms unequally far. ``hold_first`` holds robot 1's body in place (``RobotPlacement.held``: it
+    neither moves nor tips, its arms still follow its gait), the paper's P4 read literally ("fix one robot").
+    Raises SceneError if the two overlap in their starting shapes.
     """
     if not (math.isfinite(r) and r > 0.0):
         raise SceneError(f'pair separation r must be > 0 body lengths, got {r!r}')
@@ -190,7 +195,7 @@ def pair_scene(spec: RobotSpec, gait: GaitConfig, r: float, theta: float, phi: f
     pose2 = place_pair(pose1, r * spec.body_length, theta, phi)
     g1 = GaitConfig(gait.alpha_max, gait.period, gait.servo_speed, phases[0])
     g2 = GaitConfig(gait.alpha_max if alpha_max2 is None else alpha_max2, gait.period, gait.servo_speed, phases[1])
-    scene = Scene((_placement(*pose1, g1), _placement(*pose2, g2)), name='pair', seed=seed)
+    scene = Scene((_placement(*pose1, g1, held=hold_first), _placement(*pose2, g2)), name='pair', seed=seed)
     scene.validate(spec, math.inf)
     return scene
 
@@ -214,7 +219,7 @@ def state_scene(placements: Sequence[RobotPlacement], gaits: Sequence[GaitConfig
             raise SceneError(f'state_scene: placement {k} has no state (take it from Physics.placements)')
     mean = np.mean([(p.x, p.y) for p in placements], axis=0)
     dx, dy = centre[0] - float(mean[0]), centre[1] - float(mean[1])
-    robots = tuple(RobotPlacement(p.x + dx, p.y + dy, p.heading, p.alpha1, p.alpha2, g, p.state)
+    robots = tuple(RobotPlacement(p.x + dx, p.y + dy, p.heading, p.alpha1, p.alpha2, g, p.state, p.held)
                    for p, g in zip(placements, gaits, strict=True))
     return Scene(robots, name=name, seed=seed, overlap_tolerance=overlap_tolerance)
 

@@ -6,6 +6,11 @@ Reads what the runs wrote and runs nothing:
   * the lone robot's trials of the specs ``single_chrono``, ``single_bullet_40`` and ``single_mujoco_40``
     (their result stores).
 
+A run at a step other than its engine's default (Bullet 1/960 s, Chrono 1e-4 s, MuJoCo 1/9600 s) is a column
+of its own, labelled with its step ('bullet 1/3840 s'); Bullet at 1/3840 and 1/7680 s gets verdicts against
+Bullet at 1/960 s and Chrono, and a convergence verdict (the gliding share agrees by Fisher's test at both finer
+steps and the gliders' mean speed is within 25 % of 1/960 s's).
+
 Usage:
   python tools/chrono_reference/cross_engine_table.py --ring out/cross/ring_*.json \
       --single-chrono out/cross/store/single_chrono --single-bullet out/cross/store/single_bullet_40 \
@@ -37,8 +42,32 @@ FISHER_P = 0.05
 SPEED_FACTOR = 2.0
 LONE_STILL_UM = 54.0          # um per cycle (0.1 W per 100 periods)
 ENGINES = ('bullet', 'chrono', 'mujoco')
+#: Each engine's default step (s): a run at another step is labelled with its step ('bullet 1/3840 s').
+DEFAULT_STEPS = {'bullet': 1.0 / 960.0, 'chrono': 1e-4, 'mujoco': 1.0 / 9600.0}
+#: Bullet's finer steps over the offset pair's ring (steps per second) and the rule of its convergence there:
+#: at every finer step the gliding share agrees with the default step's (Fisher) and the gliders' mean speed is
+#: within this fraction of it.
+FINE_BULLET = (3840, 7680)
+CONVERGED_SPEED = 0.25
 #: The engine pairs a verdict is given for (where both ran).
-VERSUS = (('bullet', 'chrono'), ('mujoco', 'chrono'), ('bullet', 'mujoco'))
+VERSUS = (('bullet', 'chrono'), ('mujoco', 'chrono'), ('bullet', 'mujoco'),
+          *((f'bullet 1/{n} s', 'bullet') for n in FINE_BULLET), *((f'bullet 1/{n} s', 'chrono') for n in FINE_BULLET))
+
+
+def label(engine: str, step: float) -> str:
+    """The engine's name at its default step, else the name with the step ('bullet 1/3840 s', 'chrono 5e-05 s')."""
+    default = DEFAULT_STEPS.get(engine)
+    if default is None or math.isclose(step, default, rel_tol=1e-6):
+        return engine
+    if engine in ('bullet', 'mujoco'):
+        return f'{engine} 1/{round(1.0 / step)} s'
+    return f'{engine} {step:g} s'
+
+
+def present(rows: dict[tuple[str, float], list[dict[str, Any]]]) -> list[str]:
+    """The engine labels of ``rows``: the default steps first (bullet, chrono, mujoco), then the others."""
+    names = {k[0] for k in rows}
+    return [e for e in ENGINES if e in names] + sorted(names - set(ENGINES))
 
 
 def wilson(k: int, n: int) -> tuple[float, float, float]:
@@ -83,13 +112,19 @@ def glides(row: dict[str, Any]) -> bool:
 
 
 def ring_rows(paths: Sequence[Path]) -> dict[tuple[str, float], list[dict[str, Any]]]:
-    """The pair rows by (engine, robot 2's phase), each with its start's theta."""
+    """The pair rows by (engine label, robot 2's phase), each with its start's theta; a start run twice in one
+    engine at one step (two files) counts once."""
     out: dict[tuple[str, float], list[dict[str, Any]]] = {}
+    seen: set[tuple[str, float, float]] = set()
     for path in paths:
         data = json.loads(path.read_text())
         theta = float(data['args']['theta'])
         for row in data['rows']:
-            out.setdefault((row['engine'], float(row['phase2'])), []).append({**row, 'theta': theta})
+            name = label(row['engine'], float(row['step']))
+            if (name, float(row['phase2']), theta) in seen:
+                continue
+            seen.add((name, float(row['phase2']), theta))
+            out.setdefault((name, float(row['phase2'])), []).append({**row, 'theta': theta})
     for rows in out.values():
         rows.sort(key=lambda r: r['theta'])
     return out
@@ -105,7 +140,7 @@ def in_phase(rows: dict[tuple[str, float], list[dict[str, Any]]]) -> list[str]:
     lines = ['| engine | starts | still at phi 180 | mean r_end (BL) | mean travel per 100 periods (W) |',
              '| --- | ---: | --- | --- | --- |']
     counts, r_ends = {}, {}
-    for engine in ENGINES:
+    for engine in present(rows):
         rs = rows.get((engine, 0.0), [])
         if not rs:
             continue
@@ -132,7 +167,7 @@ def offset(rows: dict[tuple[str, float], list[dict[str, Any]]]) -> list[str]:
     lines = ['| engine | starts | gliding | travel per 100 periods of the gliders (W) | phi_end of the gliders (deg) |',
              '| --- | ---: | --- | --- | --- |']
     counts, speeds = {}, {}
-    for engine in ENGINES:
+    for engine in present(rows):
         rs = rows.get((engine, 0.1), [])
         if not rs:
             continue
@@ -156,22 +191,33 @@ def offset(rows: dict[tuple[str, float], list[dict[str, Any]]]) -> list[str]:
             text += (f'{a} / {b} = {ratio:.2f}: '
                      f'**{"agree" if 1 / SPEED_FACTOR <= ratio <= SPEED_FACTOR else "differ"}**.')
         lines.append(text)
+    fine = [f'bullet 1/{n} s' for n in FINE_BULLET]
+    if 'bullet' in counts and all(f in counts for f in fine):
+        verdicts = []
+        for f in fine:
+            (ka, na), (kb, nb) = counts[f], counts['bullet']
+            p = fisher_exact([[ka, na - ka], [kb, nb - kb]]).pvalue
+            ratio = (float(np.mean(speeds[f]) / np.mean(speeds['bullet'])) if speeds[f] and speeds['bullet']
+                     else math.nan)
+            verdicts.append(p >= FISHER_P and abs(ratio - 1.0) <= CONVERGED_SPEED)
+        lines.append(f'- Bullet at 1/960 s on the ring: **{"converged" if all(verdicts) else "not converged"}** '
+                     f'(share agrees at both finer steps and speed within {100 * CONVERGED_SPEED:.0f} %).')
     return lines
 
 
 def per_start(rows: dict[tuple[str, float], list[dict[str, Any]]]) -> list[str]:
     """Every run: theta, phase, engine, r_end, phi_end, travel per 100, bound tail, the rule's label."""
-    present = [e for e in ENGINES if any(k[0] == e for k in rows)]
-    lines = ['| theta (deg) | phase2 | ' + ' | '.join(f'{e}: r_end / phi_end / per 100 / tail' for e in present) + ' |',
-             '| ---: | ---: |' + ' --- |' * len(present)]
+    names = present(rows)
+    lines = ['| theta (deg) | phase2 | ' + ' | '.join(f'{e}: r_end / phi_end / per 100 / tail' for e in names) + ' |',
+             '| ---: | ---: |' + ' --- |' * len(names)]
     for phase in (0.0, 0.1):
         by_theta: dict[float, dict[str, dict[str, Any]]] = {}
-        for engine in ENGINES:
+        for engine in names:
             for r in rows.get((engine, phase), []):
                 by_theta.setdefault(r['theta'], {})[engine] = r
         for theta in sorted(by_theta):
             cells = []
-            for engine in present:
+            for engine in names:
                 run = by_theta[theta].get(engine)
                 if run is None:
                     cells.append('-')
