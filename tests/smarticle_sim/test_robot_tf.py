@@ -63,14 +63,20 @@ def check_frames(transforms: list[Any], poses: np.ndarray, arms: np.ndarray, bod
         assert arm1.transform.translation.x < 0.0 < arm2.transform.translation.x
 
 
-def test_descriptions_and_frames_of_two_robots_follow_poses_and_arms(sim_world: SimWorld) -> None:
-    spec = robot_preset('small')
+def subscribe_descriptions(sim_world: SimWorld, robots: int) -> dict[int, str]:
+    """Subscribe the probe to each robot's latched ``robot_description``; the dict fills as they arrive."""
     descriptions: dict[int, str] = {}
     String = topics.message_class(topics.spec_of('robot_description').type)
     latched = topics.qos_profile(topics.spec_of('robot_description').qos)
-    for k in range(2):
+    for k in range(robots):
         sim_world.probe.create_subscription(String, topics.topic('robot_description', k),
                                             lambda msg, k=k: descriptions.__setitem__(k, msg.data), latched)
+    return descriptions
+
+
+def test_descriptions_and_frames_of_two_robots_follow_poses_and_arms(sim_world: SimWorld) -> None:
+    spec = robot_preset('small')
+    descriptions = subscribe_descriptions(sim_world, 2)
     sim_world.start(scene='pair', joint_states=True, params={'start_at': 0.2})
     sim_world.step_to(2.0)
     assert sim_world.spin_until(lambda: len(descriptions) == 2, 10.0), f'descriptions received: {list(descriptions)}'
@@ -149,12 +155,7 @@ def test_tf_from_the_bridge_matches_the_poses_and_arm_angles(sim_world: SimWorld
         for t in msg.transforms:
             received.setdefault(t.header.stamp.sec * 10**9 + t.header.stamp.nanosec, []).append(t)
 
-    descriptions: dict[int, str] = {}
-    String = topics.message_class(topics.spec_of('robot_description').type)
-    latched = topics.qos_profile(topics.spec_of('robot_description').qos)
-    for k in range(2):
-        sim_world.probe.create_subscription(String, topics.topic('robot_description', k),
-                                            lambda msg, k=k: descriptions.__setitem__(k, msg.data), latched)
+    descriptions = subscribe_descriptions(sim_world, 2)
     sim_world.probe.create_subscription(TFMessage, TF_TOPIC, on_tf, topics.qos_profile(topics.Qos.COMMAND))
     sim_world.start(scene='pair', joint_states=True, params={'start_at': 0.2})
     sim_world.step_to(2.0)

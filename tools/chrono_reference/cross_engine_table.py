@@ -26,12 +26,14 @@ import argparse
 import json
 import math
 import sys
-from collections.abc import Sequence
+import time
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from scipy.stats import binomtest, bootstrap, fisher_exact
+from smarticle_common.cli import closed_pipe_safe
 
 #: The rules' thresholds (docs/chrono_reference.md, "The cross-engine table").
 STILL_TRAVEL_W = 0.1          # W over the run: a still pair travels less
@@ -52,6 +54,33 @@ CONVERGED_SPEED = 0.25
 #: The engine pairs a verdict is given for (where both ran).
 VERSUS = (('bullet', 'chrono'), ('mujoco', 'chrono'), ('bullet', 'mujoco'),
           *((f'bullet 1/{n} s', 'bullet') for n in FINE_BULLET), *((f'bullet 1/{n} s', 'chrono') for n in FINE_BULLET))
+
+
+def record_missing(out: Path, starts: Iterable[tuple[int, Any]], engines: Sequence[str],
+                   run: Callable[[str, Any], Any]) -> None:
+    """Run each (seed, start) in each engine into ``out/<engine>_seed<seed>.npz``, one line per run.
+
+    A recording already on disk is kept (a run can be resumed); an engine that is not built (Chrono) is
+    skipped with its one line. ``run(engine, start)`` returns a ``Recording``.
+    """
+    from smarticle_common.runs import save_npz
+    from smarticle_sim.chrono_reference import ChronoUnavailable
+
+    out.mkdir(parents=True, exist_ok=True)
+    for seed, start in starts:
+        for engine in engines:
+            path = out / f'{engine}_seed{seed}.npz'
+            if path.exists():
+                continue
+            wall = time.perf_counter()
+            try:
+                rec = run(engine, start)
+            except ChronoUnavailable as exc:
+                print(f'skipped: {exc}', file=sys.stderr)
+                continue
+            save_npz(rec, path)
+            print(f'{engine} seed {seed}: {len(rec.time)} samples, trouble {rec.trouble or "none"}, '
+                  f'{time.perf_counter() - wall:.0f} s', flush=True)
 
 
 def label(engine: str, step: float) -> str:
@@ -291,4 +320,4 @@ def main() -> int:
 
 
 if __name__ == '__main__':
-    sys.exit(main())
+    sys.exit(closed_pipe_safe(main)())

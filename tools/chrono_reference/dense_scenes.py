@@ -24,7 +24,6 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -32,19 +31,19 @@ from typing import Any
 import numpy as np
 from scipy.stats import fisher_exact
 
-from smarticle_common.cli import seeds_argument
+from smarticle_common.cli import seeds_argument, closed_pipe_safe
 from smarticle_common.facts import R_BIND_BL
 from smarticle_common.gait import GaitConfig
-from smarticle_common.runs import Recording, load_npz, save_npz
+from smarticle_common.runs import Recording, load_npz
 from smarticle_sim.batch import run_trial
-from smarticle_sim.chrono_reference import ChronoSettings, ChronoUnavailable, run_chrono
+from smarticle_sim.chrono_reference import ChronoSettings, run_chrono
 from smarticle_sim.mujoco_engine import MujocoSettings, run_mujoco
 from smarticle_sim.scenes import Scene, dense_scene
 from smarticle_sim.settings import SimConfig
 from smarticle_tracking.gliders import GliderConfig, analyse_gliders
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from cross_engine_table import FISHER_P, SPEED_FACTOR, boot, fmt, overlap, wilson
+from cross_engine_table import FISHER_P, SPEED_FACTOR, boot, fmt, overlap, record_missing, wilson
 
 ENGINES = ('bullet', 'mujoco', 'chrono')
 #: The rules' figures (docs/chrono_reference.md, "Dense 7-robot scenes").
@@ -261,21 +260,8 @@ def main() -> int:
     tab.add_argument('folder', type=Path)
     args = parser.parse_args()
     if args.command == 'run':
-        args.out.mkdir(parents=True, exist_ok=True)
-        for seed in args.seeds:
-            for engine in args.engines:
-                path = args.out / f'{engine}_seed{seed}.npz'
-                if path.exists():
-                    continue
-                wall = time.perf_counter()
-                try:
-                    rec = run_engine(engine, seed, args.periods)
-                except ChronoUnavailable as exc:
-                    print(f'skipped: {exc}', file=sys.stderr)
-                    continue
-                save_npz(rec, path)
-                print(f'{engine} seed {seed}: {len(rec.time)} samples, trouble {rec.trouble or "none"}, '
-                      f'{time.perf_counter() - wall:.0f} s', flush=True)
+        record_missing(args.out, [(seed, seed) for seed in args.seeds], args.engines,
+                       lambda engine, seed: run_engine(engine, seed, args.periods))
         return 0
     figures = common(read_folder(args.folder))
     if not figures:
@@ -294,4 +280,4 @@ def main() -> int:
 
 
 if __name__ == '__main__':
-    sys.exit(main())
+    sys.exit(closed_pipe_safe(main)())

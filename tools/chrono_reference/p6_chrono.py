@@ -26,7 +26,6 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -34,17 +33,18 @@ from typing import Any
 import numpy as np
 from scipy.stats import fisher_exact
 
+from smarticle_common.cli import closed_pipe_safe
 from smarticle_common.gait import GaitConfig
 from smarticle_common.pairs import one_pair
-from smarticle_common.runs import Recording, load_npz, save_npz
+from smarticle_common.runs import Recording, load_npz
 from smarticle_experiments.p6 import load_held_starts, pair_lifetime
 from smarticle_sim.batch import run_trial
-from smarticle_sim.chrono_reference import ChronoSettings, ChronoUnavailable, at_rest_scene, run_chrono
+from smarticle_sim.chrono_reference import ChronoSettings, at_rest_scene, run_chrono
 from smarticle_sim.scenes import Scene, state_scene
 from smarticle_sim.settings import SimConfig
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from cross_engine_table import FISHER_P, fmt, wilson
+from cross_engine_table import FISHER_P, fmt, record_missing, wilson
 
 ENGINES = ('chrono', 'bullet')
 PRESET = 'feedback'
@@ -187,21 +187,8 @@ def main() -> int:
     rows = held_rows()
     _, gait = config_and_gait()
     if args.command == 'run':
-        args.out.mkdir(parents=True, exist_ok=True)
-        for s in rows[:args.count]:
-            for engine in args.engines:
-                path = args.out / f'{engine}_seed{s.seed}.npz'
-                if path.exists():
-                    continue
-                wall = time.perf_counter()
-                try:
-                    rec = run_engine(engine, s, args.periods)
-                except ChronoUnavailable as exc:
-                    print(f'skipped: {exc}', file=sys.stderr)
-                    continue
-                save_npz(rec, path)
-                print(f'{engine} seed {s.seed}: {len(rec.time)} samples, trouble {rec.trouble or "none"}, '
-                      f'{time.perf_counter() - wall:.0f} s', flush=True)
+        record_missing(args.out, [(s.seed, s) for s in rows[:args.count]], args.engines,
+                       lambda engine, start: run_engine(engine, start, args.periods))
         return 0
     outcomes = {}
     periods = 0.0
@@ -225,4 +212,4 @@ def main() -> int:
 
 
 if __name__ == '__main__':
-    sys.exit(main())
+    sys.exit(closed_pipe_safe(main)())

@@ -25,7 +25,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from smarticle_common.cli import seeds_argument
+from smarticle_common.cli import seeds_argument, closed_pipe_safe
 from smarticle_common.facts import R_BIND_BL
 from smarticle_common.gait import GaitConfig
 from smarticle_common.runs import save_npz
@@ -122,4 +122,4 @@ def main() -> int:
 
 
 if __name__ == '__main__':
-    sys.exit(main())
+    sys.exit(closed_pipe_safe(main)())
