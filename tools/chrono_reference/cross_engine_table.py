@@ -159,6 +159,11 @@ def ring_rows(paths: Sequence[Path]) -> dict[tuple[str, float], list[dict[str, A
     return out
 
 
+def fisher_p(a: tuple[int, int], b: tuple[int, int]) -> float:
+    """Fisher's exact test of two shares, each (k, n): its two-sided p-value."""
+    return float(fisher_exact([[a[0], a[1] - a[0]], [b[0], b[1] - b[0]]]).pvalue)
+
+
 def overlap(a: tuple[float, float, float], b: tuple[float, float, float]) -> bool:
     """True if the two intervals overlap."""
     return a[1] <= b[2] and b[1] <= a[2]
@@ -182,8 +187,7 @@ def in_phase(rows: dict[tuple[str, float], list[dict[str, Any]]]) -> list[str]:
     for a, b in VERSUS:
         if a not in counts or b not in counts:
             continue
-        (ka, na), (kb, nb) = counts[a], counts[b]
-        p = fisher_exact([[ka, na - ka], [kb, nb - kb]]).pvalue
+        p = fisher_p(counts[a], counts[b])
         both = overlap(r_ends[a], r_ends[b])
         lines.append(f'- {a} vs {b}: state: Fisher p = {p:.3g}: **{"agree" if p >= FISHER_P else "differ"}**; '
                      f'r_end: intervals {"overlap" if both else "do not overlap"}: '
@@ -210,8 +214,7 @@ def offset(rows: dict[tuple[str, float], list[dict[str, Any]]]) -> list[str]:
     for a, b in VERSUS:
         if a not in counts or b not in counts:
             continue
-        (ka, na), (kb, nb) = counts[a], counts[b]
-        p = fisher_exact([[ka, na - ka], [kb, nb - kb]]).pvalue
+        p = fisher_p(counts[a], counts[b])
         text = f'- {a} vs {b}: share: Fisher p = {p:.3g}: **{"agree" if p >= FISHER_P else "differ"}**; speed: '
         if min(len(speeds[a]), len(speeds[b])) < 2:
             text += '**not decided** (fewer than 2 gliders in an engine).'
@@ -224,8 +227,7 @@ def offset(rows: dict[tuple[str, float], list[dict[str, Any]]]) -> list[str]:
     if 'bullet' in counts and all(f in counts for f in fine):
         verdicts = []
         for f in fine:
-            (ka, na), (kb, nb) = counts[f], counts['bullet']
-            p = fisher_exact([[ka, na - ka], [kb, nb - kb]]).pvalue
+            p = fisher_p(counts[f], counts['bullet'])
             ratio = (float(np.mean(speeds[f]) / np.mean(speeds['bullet'])) if speeds[f] and speeds['bullet']
                      else math.nan)
             verdicts.append(p >= FISHER_P and abs(ratio - 1.0) <= CONVERGED_SPEED)

@@ -29,7 +29,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy.stats import fisher_exact
 
 from smarticle_common.cli import seeds_argument, closed_pipe_safe
 from smarticle_common.facts import R_BIND_BL
@@ -43,7 +42,7 @@ from smarticle_sim.settings import SimConfig
 from smarticle_tracking.gliders import GliderConfig, analyse_gliders
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from cross_engine_table import FISHER_P, SPEED_FACTOR, boot, fmt, overlap, record_missing, wilson
+from cross_engine_table import FISHER_P, SPEED_FACTOR, boot, fisher_p, fmt, overlap, record_missing, wilson
 
 ENGINES = ('bullet', 'mujoco', 'chrono')
 #: The rules' figures (docs/chrono_reference.md, "Dense 7-robot scenes").
@@ -140,7 +139,7 @@ def share_verdict(a: tuple[int, int], b: tuple[int, int]) -> str:
     """Fisher's exact test on two shares (k, n): 'agree (p = ..)' or 'differ (p = ..)'."""
     if a[1] == 0 or b[1] == 0:
         return 'not decided (no scenes)'
-    p = fisher_exact([[a[0], a[1] - a[0]], [b[0], b[1] - b[0]]]).pvalue
+    p = fisher_p(a, b)
     return f'{"agree" if p >= FISHER_P else "differ"} (p = {p:.2g})'
 
 

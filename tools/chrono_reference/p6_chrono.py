@@ -31,7 +31,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy.stats import fisher_exact
 
 from smarticle_common.cli import closed_pipe_safe
 from smarticle_common.gait import GaitConfig
@@ -44,7 +43,7 @@ from smarticle_sim.scenes import Scene, state_scene
 from smarticle_sim.settings import SimConfig
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from cross_engine_table import FISHER_P, fmt, record_missing, wilson
+from cross_engine_table import FISHER_P, fisher_p, fmt, record_missing, wilson
 
 ENGINES = ('chrono', 'bullet')
 PRESET = 'feedback'
@@ -131,8 +130,7 @@ def engine_lines(outcomes: Mapping[tuple[str, int], Mapping[str, Any]], periods:
         lines.append(f'| {engine} | {len(rows)} | {share} | {lives} | {km} | {len(rows) - len(sound)} | '
                      f'{np.mean([o["travel_w_per_100"] for o in sound]):.2g} |')
     if set(counts) == set(ENGINES) and all(n for _, n in counts.values()):
-        (ka, na), (kb, nb) = counts['chrono'], counts['bullet']
-        p = fisher_exact([[ka, na - ka], [kb, nb - kb]]).pvalue
+        p = fisher_p(counts['chrono'], counts['bullet'])
         lines += ['', f'- chrono vs bullet, broken share: Fisher p = {p:.2g}: '
                       f'**{"agree" if p >= FISHER_P else "differ"}**.']
     return lines
