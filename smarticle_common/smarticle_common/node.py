@@ -15,6 +15,7 @@ from __future__ import annotations
 import os
 import sys
 import textwrap
+import time
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any, TypeVar
@@ -216,6 +217,22 @@ def _answer_help_or_version(factory: Callable[[], Node], node_name: str, args: S
     return True
 
 
+#: How long (s) an rclpy error may precede the context's shutdown and still count as the signal's doing:
+#: rclpy's signal thread shuts contexts down about a millisecond after the signal, and a signal landing in
+#: a message's conversion surfaces first as pybind11's "Unable to convert call argument".
+_SIGNAL_SHUTDOWN_S = 1.0
+
+
+def _context_ends(timeout: float) -> bool:
+    """True once rclpy's default context is shut down, waiting at most ``timeout`` seconds."""
+    deadline = time.monotonic() + timeout
+    while rclpy.ok():
+        if time.monotonic() >= deadline:
+            return False
+        time.sleep(0.005)
+    return True
+
+
 def run_node(factory: Callable[[], Node], node_name: str, args: list[str] | None = None,
              startup_errors: tuple[type[BaseException], ...] = (ParameterError,),
              params: Sequence[ParamSpec] | None = None) -> int:
@@ -229,8 +246,9 @@ def run_node(factory: Callable[[], Node], node_name: str, args: list[str] | None
     its return value is the exit code; any other node is spun. An error of ``startup_errors`` raised
     while the node is being built (a bad parameter or file) is logged as fatal and ends the process with
     exit code 2; the same error later propagates. An rclpy error raised because a signal shut the
-    context down under the executor (Jazzy's races, e.g. "failed to initialize wait set") is a clean
-    exit, like KeyboardInterrupt.
+    context down under the executor, or is about to (Jazzy's races, e.g. "failed to initialize wait set",
+    or pybind11's "Unable to convert call argument" when the signal lands in a message's conversion), is a
+    clean exit, like KeyboardInterrupt: it counts if the context is shut down within a second of the error.
     """
     if _answer_help_or_version(factory, node_name, args, params):
         return 0
@@ -259,7 +277,7 @@ def run_node(factory: Callable[[], Node], node_name: str, args: list[str] | None
         rclpy.logging.get_logger(node_name).fatal(f'cannot start: {err}')
         code = 2
     except RuntimeError:    # rclpy's RCLError and pybind11 errors of a context that a signal just ended
-        if node is None or rclpy.ok():
+        if node is None or not _context_ends(_SIGNAL_SHUTDOWN_S):
             raise
     finally:
         if node is not None:

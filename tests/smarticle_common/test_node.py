@@ -1,7 +1,11 @@
-"""The node helper: parameters carry their ranges, and a running node refuses changes it cannot apply."""
+"""The node helper: parameters carry their ranges, a running node refuses changes it cannot apply, and a
+signal ends a node cleanly even when it lands inside rclpy's own code."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
+import textwrap
 from typing import Any
 
 import pytest
@@ -51,3 +55,43 @@ def test_a_running_node_refuses_a_change_it_cannot_apply(nodes: Any, ros_node: A
     assert value == 1.6                                    # unchanged
     assert proc.poll() is None, 'the node keeps running after a refused change'
     assert rclpy.ok()
+
+
+#: A node whose first timer tick raises what rclpy's pybind11 layer raises when a signal lands while it
+#: converts a message ("Unable to convert call argument"), before rclpy's signal thread has shut the context
+#: down: here the signal (SIGTERM, which only shuts the context down) is sent 0.1 s after the error, so the
+#: order is certain. With ``SIGNAL = False`` the same error comes with no signal: a real fault, which must not
+#: be swallowed.
+_RACE_NODE = """
+import os, signal, sys, threading
+from rclpy.node import Node
+from smarticle_common.node import run_node
+
+SIGNAL = {signal}
+
+class Racer(Node):
+    def __init__(self):
+        super().__init__('racer')
+        self.create_timer(0.05, self.tick)
+
+    def tick(self):
+        if SIGNAL:
+            threading.Timer(0.1, os.kill, (os.getpid(), signal.SIGTERM)).start()
+        raise RuntimeError('Unable to convert call argument to Python object')
+
+raise SystemExit(run_node(Racer, 'racer', sys.argv))
+"""
+
+
+@pytest.mark.integration
+def test_an_rclpy_error_just_before_a_signals_shutdown_is_a_clean_exit() -> None:
+    run = subprocess.run([sys.executable, '-c', textwrap.dedent(_RACE_NODE.format(signal=True))],
+                         capture_output=True, text=True, timeout=60)
+    assert run.returncode == 0 and 'Traceback' not in run.stderr, run.stderr
+
+
+@pytest.mark.integration
+def test_an_rclpy_error_without_a_signal_still_fails_the_node() -> None:
+    run = subprocess.run([sys.executable, '-c', textwrap.dedent(_RACE_NODE.format(signal=False))],
+                         capture_output=True, text=True, timeout=60)
+    assert run.returncode != 0 and 'Unable to convert' in run.stderr, run.stderr
