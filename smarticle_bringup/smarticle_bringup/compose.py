@@ -78,12 +78,23 @@ def host(actions: Sequence[Any], args: list[str] | None = None,
          executor_factory: Callable[[], Any] | None = None) -> int:
     """Build every node of ``actions`` in this process, run them on one executor; return the exit code.
 
-    The Jazzy idiom, for many nodes: ``rclpy.init``; build; run or spin; on Ctrl-C or external shutdown
-    stop quietly; finally destroy every node and ``try_shutdown``. A startup error of a node (bad
-    parameter, a file or port that cannot be opened) is logged as fatal and gives exit code 2.
+    The Jazzy idiom, for many nodes: ``rclpy.init``; build; run or spin; on Ctrl-C (which shuts the
+    context down, as in ``run_node``) or external shutdown stop quietly; finally destroy every node and
+    ``try_shutdown``. A startup error of a node (bad parameter, a file or port that cannot be opened) is
+    logged as fatal and gives exit code 2.
     """
+    from smarticle_common.node import SigintShutsDown
+
+    with SigintShutsDown():
+        return _init_and_host(actions, args, executor_factory)
+
+
+def _init_and_host(actions: Sequence[Any], args: list[str] | None,
+                   executor_factory: Callable[[], Any] | None) -> int:
+    """``host`` once its signal handler is in place."""
     import rclpy
     from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+    from smarticle_common.node import ended_by_signal
     from smarticle_common.params import ParameterError
 
     from smarticle_driver.errors import DriverError
@@ -117,8 +128,8 @@ def host(actions: Sequence[Any], args: list[str] | None = None,
             raise
         rclpy.logging.get_logger(NAME).fatal(f'cannot start: {err}')
         code = 2
-    except RuntimeError:      # rclpy's errors of a context that a signal just ended
-        if rclpy.ok():
+    except RuntimeError:      # rclpy's errors of a context that a signal just ended, or is about to
+        if not ended_by_signal():
             raise
     finally:
         for node in reversed(nodes):

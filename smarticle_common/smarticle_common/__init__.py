@@ -12,7 +12,8 @@ Modules (no rclpy import in any of them but ``node``, the node helper):
 * ``runs``: the one run format on disk (batch trials, the demo, ``smarticle-bag export --run``);
 * ``commands``: the joint-command checks shared by the servo bridge and the sim bridge;
 * ``params``: parameter tables (``ParamSpec``, ``ROBOT_ID_PARAM``) and their shipped YAML defaults;
-* ``node``: the node helper (``read_config``, ``DiagnosticsPublisher``, ``resolve_robot_id``, ``run_node``);
+* ``node``: the node helper (``read_config``, ``DiagnosticsPublisher``, ``resolve_robot_id``, ``run_node``,
+  ``SigintShutsDown``, ``ended_by_signal``);
 * ``launching``: the process launcher of tests, benchmarks and the demo;
 * ``cli``: the command-line habits of every console script (``--version``, a closed pipe, the seed syntax);
 * ``robot_model``: a preset's URDF from ``RobotSpec`` and the TF frames of a robot from its pose and arms;

@@ -13,8 +13,10 @@ defaults, ranges and descriptions) and ``--version`` before ``--ros-args``, with
 from __future__ import annotations
 
 import os
+import signal
 import sys
 import textwrap
+import threading
 import time
 import warnings
 from collections.abc import Callable, Mapping, Sequence
@@ -223,14 +225,44 @@ def _answer_help_or_version(factory: Callable[[], Node], node_name: str, args: S
 _SIGNAL_SHUTDOWN_S = 1.0
 
 
-def _context_ends(timeout: float) -> bool:
-    """True once rclpy's default context is shut down, waiting at most ``timeout`` seconds."""
+def ended_by_signal(timeout: float = _SIGNAL_SHUTDOWN_S) -> bool:
+    """True once rclpy's default context is shut down, waiting at most ``timeout`` seconds: whether an rclpy
+    error just raised came from a signal's shutdown (then the context is down, or goes down within a second)."""
     deadline = time.monotonic() + timeout
     while rclpy.ok():
         if time.monotonic() >= deadline:
             return False
         time.sleep(0.005)
     return True
+
+
+class SigintShutsDown:
+    """SIGINT (Ctrl-C) ends a node like SIGTERM: rclpy's own handler shuts the context down and wakes the
+    executor, and Python raises no KeyboardInterrupt inside rclpy's code (where it surfaces as pybind11's
+    "Unable to convert call argument", as "Exception ignored in Future.__del__" or as an unstarted
+    callback). A second Ctrl-C raises KeyboardInterrupt, for a callback that does not return.
+
+    Installed before ``rclpy.init``, which chains its handler to this one; the previous handler is put back
+    on exit. Outside the main thread (where Python allows no handler) it does nothing.
+    """
+
+    def __init__(self) -> None:
+        self.previous: Any = None
+        self.presses = 0
+
+    def __enter__(self) -> SigintShutsDown:
+        if threading.current_thread() is threading.main_thread():
+            self.previous = signal.signal(signal.SIGINT, self._on_sigint)
+        return self
+
+    def _on_sigint(self, signum: int, frame: Any) -> None:
+        self.presses += 1
+        if self.presses > 1:
+            raise KeyboardInterrupt
+
+    def __exit__(self, *exc: object) -> None:
+        if self.previous is not None:
+            signal.signal(signal.SIGINT, self.previous)
 
 
 def run_node(factory: Callable[[], Node], node_name: str, args: list[str] | None = None,
@@ -249,9 +281,17 @@ def run_node(factory: Callable[[], Node], node_name: str, args: list[str] | None
     context down under the executor, or is about to (Jazzy's races, e.g. "failed to initialize wait set",
     or pybind11's "Unable to convert call argument" when the signal lands in a message's conversion), is a
     clean exit, like KeyboardInterrupt: it counts if the context is shut down within a second of the error.
+    Ctrl-C shuts the context down as SIGTERM does (a second one raises KeyboardInterrupt).
     """
     if _answer_help_or_version(factory, node_name, args, params):
         return 0
+    with SigintShutsDown():
+        return _init_and_run(factory, node_name, args, startup_errors)
+
+
+def _init_and_run(factory: Callable[[], Node], node_name: str, args: list[str] | None,
+                  startup_errors: tuple[type[BaseException], ...]) -> int:
+    """``run_node`` once its signal handler is in place: init, build, run or spin, destroy, shut down."""
     rclpy.init(args=args)
     # A signal that lands while rclpy's executor is handing a message to a callback leaves that callback's
     # coroutine unstarted; Python reports it when it is collected at exit. The message arrived during
@@ -277,7 +317,7 @@ def run_node(factory: Callable[[], Node], node_name: str, args: list[str] | None
         rclpy.logging.get_logger(node_name).fatal(f'cannot start: {err}')
         code = 2
     except RuntimeError:    # rclpy's RCLError and pybind11 errors of a context that a signal just ended
-        if node is None or not _context_ends(_SIGNAL_SHUTDOWN_S):
+        if node is None or not ended_by_signal():
             raise
     finally:
         if node is not None:

@@ -1,8 +1,10 @@
 """The node helper: parameters carry their ranges, a running node refuses changes it cannot apply, and a
-signal ends a node cleanly even when it lands inside rclpy's own code."""
+signal ends a node cleanly even when it lands inside rclpy's own code (Ctrl-C shuts the context down; a second Ctrl-C
+interrupts a stuck callback)."""
 
 from __future__ import annotations
 
+import signal
 import subprocess
 import sys
 import textwrap
@@ -95,3 +97,39 @@ def test_an_rclpy_error_without_a_signal_still_fails_the_node() -> None:
     run = subprocess.run([sys.executable, '-c', textwrap.dedent(_RACE_NODE.format(signal=False))],
                          capture_output=True, text=True, timeout=60)
     assert run.returncode != 0 and 'Unable to convert' in run.stderr, run.stderr
+
+
+#: A node whose one callback never returns (a stuck driver call).
+_STUCK_NODE = """
+import sys, time
+from rclpy.node import Node
+from smarticle_common.node import run_node
+
+class Stuck(Node):
+    def __init__(self):
+        super().__init__('stuck')
+        self.create_timer(0.05, self.tick)
+
+    def tick(self):
+        print('stuck', flush=True)
+        time.sleep(1000.0)
+
+raise SystemExit(run_node(Stuck, 'stuck', sys.argv))
+"""
+
+
+@pytest.mark.integration
+def test_ctrl_c_shuts_the_context_down_and_a_second_one_interrupts_a_stuck_callback() -> None:
+    proc = subprocess.Popen([sys.executable, '-c', textwrap.dedent(_STUCK_NODE)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout is not None and proc.stdout.readline() == 'stuck\n'
+        proc.send_signal(signal.SIGINT)          # the context goes down; the callback is not interrupted
+        with pytest.raises(subprocess.TimeoutExpired):
+            proc.wait(timeout=1.0)
+        proc.send_signal(signal.SIGINT)          # the second press raises KeyboardInterrupt in the callback
+        assert proc.wait(timeout=10.0) == 0
+        assert 'Traceback' not in (proc.stderr.read() if proc.stderr else '')
+    finally:
+        proc.kill()
+        proc.wait()
