@@ -100,7 +100,7 @@ class RobotSpec:
 #: from the authors' Chrono model (body 5.4 x 2.7 x 2.2 cm with 24.8 g, arms 5.0 x 2.3 x 0.3 cm with 5 g
 #: each), arms 2 mm above the plate. Servo torque limit 0.05 N m, not the hobby servo's rating: a free
 #: stroke needs ~0.006 N m (the drift is the same to the digit), while a stronger servo drives 5-17 N
-#: contact forces in jams that tip robots (docs/physics_study.md section C, docs/sim_calibration.md).
+#: contact forces in jams that tip robots (docs/history/physics_study.md section C, docs/sim_calibration.md).
 SMALL = RobotSpec(name='small', body_width=0.054, body_depth=0.022, body_height=0.027,
                   arm_length=0.050, arm_thickness=0.003, arm_height=0.023, arm_clearance=0.002,
                   total_mass=0.0348, arm_mass=0.005, servo_torque=0.05)

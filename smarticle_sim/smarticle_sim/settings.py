@@ -82,13 +82,13 @@ class PhysicsConfig:
     #: Arm-arm friction. None: every robot-robot pair uses friction_robot_robot (the default, as in the
     #: authors' model). A number: arm-arm uses it, arm-body keeps friction_robot_robot, and body-body
     #: becomes friction_robot_robot**2 / friction_arm_arm (Bullet multiplies the two links' values). The
-    #: old 1.5 "hook" took back part of every push and kept every pair bound (docs/physics_study.md, A).
+    #: old 1.5 "hook" took back part of every push and kept every pair bound (docs/history/physics_study.md, A).
     friction_arm_arm: float | None = None
     #: Robot-robot restitution set in Bullet: 0.80, which with ``contact_erp`` 0.1 gives two robots meeting
     #: head on the authors' 0.85; Bullet adds the ERP's push-out of the impact step's overlap to the bounce
     #: (docs/calibration/paper_figures.md, "What restitution Bullet gives"). Restitution is what makes
     #: collisions repel: kicks that leave the pair separating instead of pushes that end at rest
-    #: (docs/physics_study.md, A).
+    #: (docs/history/physics_study.md, A).
     restitution: float = 0.80
     position_gain: float = 0.3                  # servo loop gain per step, used only if servo_bandwidth is None
     plate_size: float = 0.60                    # square plate side (m), centred on the origin
@@ -121,7 +121,7 @@ class PhysicsConfig:
     ccd_swept_sphere_radius: float = 0.0
     #: Factor on the body's roll and pitch inertia (mass, yaw inertia and contacts unchanged). 1: the body's
     #: own. x100 kept robots flat while impacts were super-elastic (contact ERP 0.6: jammed robots bounced
-    #: between two contacts and rolled over; docs/physics_study.md, C); at the default contact the robots'
+    #: between two contacts and rolled over; docs/history/physics_study.md, C); at the default contact the robots'
     #: own inertia runs clean (docs/calibration/paper_figures.md, "The robots' own roll and pitch inertia"),
     #: so nothing departs from the robot here any more.
     tilt_inertia_scale: float = 1.0

@@ -1,4 +1,4 @@
-"""The opt-in physics knobs of issue #11 (docs/physics_study.md): defaults unchanged, values reach Bullet."""
+"""The physics knobs (docs/sim_calibration.md, docs/history/physics_study.md): defaults, refusals, values in Bullet."""
 
 from __future__ import annotations
 
