@@ -1,6 +1,7 @@
 """Uncertainties from scipy.stats: Wilson intervals, Kaplan-Meier lifetimes, bootstrap intervals of means.
 
-* Proportions: ``scipy.stats.binomtest(k, n).proportion_ci(0.95, method='wilson')``.
+* Proportions: ``scipy.stats.binomtest(k, n).proportion_ci(0.95, method='wilson')``; two proportions
+  compared by Fisher's exact test (``scipy.stats.fisher_exact``, two-sided).
 * Lifetimes cut off by the end of a trial: Kaplan-Meier survival ``scipy.stats.ecdf`` of
   ``CensoredData`` (right-censored = still bound at the end); the median and its 95 % interval are read
   off the survival curve and its pointwise 95 % band (log-log) where they cross 0.5.
@@ -60,6 +61,13 @@ def wilson(k: int, n: int) -> Estimate:
         return Estimate(math.nan, math.nan, math.nan, 0, 'Wilson')
     ci = binomtest(int(k), int(n)).proportion_ci(confidence_level=CONFIDENCE, method='wilson')
     return Estimate(k / n, float(ci.low), float(ci.high), int(n), 'Wilson')
+
+
+def fisher_p(a: tuple[int, int], b: tuple[int, int]) -> float:
+    """Fisher's exact test of two proportions, each (k, n): its two-sided p-value (scipy.stats.fisher_exact)."""
+    from scipy.stats import fisher_exact
+
+    return float(fisher_exact([[a[0], a[1] - a[0]], [b[0], b[1] - b[0]]]).pvalue)
 
 
 def bootstrap_mean(values: Sequence[float]) -> Estimate:

@@ -32,8 +32,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy.stats import binomtest, bootstrap, fisher_exact
+from scipy.stats import bootstrap
 from smarticle_common.cli import closed_pipe_safe
+from smarticle_experiments import stats
+from smarticle_experiments.stats import fisher_p
 
 #: The rules' thresholds (docs/chrono_reference.md, "The cross-engine table").
 STILL_TRAVEL_W = 0.1          # W over the run: a still pair travels less
@@ -100,9 +102,9 @@ def present(rows: dict[tuple[str, float], list[dict[str, Any]]]) -> list[str]:
 
 
 def wilson(k: int, n: int) -> tuple[float, float, float]:
-    """k/n and its 95 % Wilson interval."""
-    ci = binomtest(k, n).proportion_ci(confidence_level=0.95, method='wilson')
-    return k / n, float(ci.low), float(ci.high)
+    """k/n and its 95 % Wilson interval, as the (value, low, high) that ``fmt`` takes."""
+    est = stats.wilson(k, n)
+    return est.value, est.low, est.high
 
 
 def boot(values: Sequence[float]) -> tuple[float, float, float]:
@@ -157,11 +159,6 @@ def ring_rows(paths: Sequence[Path]) -> dict[tuple[str, float], list[dict[str, A
     for rows in out.values():
         rows.sort(key=lambda r: r['theta'])
     return out
-
-
-def fisher_p(a: tuple[int, int], b: tuple[int, int]) -> float:
-    """Fisher's exact test of two shares, each (k, n): its two-sided p-value."""
-    return float(fisher_exact([[a[0], a[1] - a[0]], [b[0], b[1] - b[0]]]).pvalue)
 
 
 def overlap(a: tuple[float, float, float], b: tuple[float, float, float]) -> bool:

@@ -34,6 +34,7 @@ from smarticle_common.cli import seeds_argument, closed_pipe_safe
 from smarticle_common.facts import R_BIND_BL
 from smarticle_common.gait import GaitConfig
 from smarticle_common.runs import Recording, load_npz
+from smarticle_experiments.stats import fisher_p
 from smarticle_sim.batch import run_trial
 from smarticle_sim.chrono_reference import ChronoSettings, run_chrono
 from smarticle_sim.mujoco_engine import MujocoSettings, run_mujoco
@@ -42,7 +43,7 @@ from smarticle_sim.settings import SimConfig
 from smarticle_tracking.gliders import GliderConfig, analyse_gliders
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from cross_engine_table import FISHER_P, SPEED_FACTOR, boot, fisher_p, fmt, overlap, record_missing, wilson
+from cross_engine_table import FISHER_P, SPEED_FACTOR, boot, fmt, overlap, record_missing, wilson
 
 ENGINES = ('bullet', 'mujoco', 'chrono')
 #: The rules' figures (docs/chrono_reference.md, "Dense 7-robot scenes").

@@ -37,13 +37,14 @@ from smarticle_common.gait import GaitConfig
 from smarticle_common.pairs import one_pair
 from smarticle_common.runs import Recording, load_npz
 from smarticle_experiments.p6 import load_held_starts, pair_lifetime
+from smarticle_experiments.stats import fisher_p
 from smarticle_sim.batch import run_trial
 from smarticle_sim.chrono_reference import ChronoSettings, at_rest_scene, run_chrono
 from smarticle_sim.scenes import Scene, state_scene
 from smarticle_sim.settings import SimConfig
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from cross_engine_table import FISHER_P, fisher_p, fmt, record_missing, wilson
+from cross_engine_table import FISHER_P, fmt, record_missing, wilson
 
 ENGINES = ('chrono', 'bullet')
 PRESET = 'feedback'
