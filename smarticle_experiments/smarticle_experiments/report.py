@@ -34,7 +34,7 @@ from .errors import ResultError
 from .results import (AccuracyResult, DenseResult, GliderRecord, InadmissiblePairResult, P6Result,
                       PairResult, SingleResult, TrialResult, read_result)
 from .spec import ExperimentSpec, Trial, canonical, seed_runs
-from .stats import Estimate, bootstrap_mean, kaplan_meier, logrank, wilson
+from .stats import Estimate, bootstrap_mean, fisher_p, kaplan_meier, logrank, wilson
 from .store import ResultStore, json_ready, write_atomic
 from .trials import MUJOCO_KINDS, config_of, ensemble_msd, msd_beta
 
@@ -443,22 +443,37 @@ def section_basin(ctx: Context) -> list[str]:
         Comparison('P4 bound starts with antiparallel normals (90 <= phi <= 270 deg)', 'mostly (> 50 %)', anti,
                    f'{anti.text(".0%", 1)}', bool(anti.n and anti.low > 0.5), 'inside = Wilson lower bound > 50 %'),
     ]
+    classes = dict(BASIN_CLASSES)
+
+    def outcomes(name: str, of_phase: float | None = None) -> list[str]:
+        """The outcomes of the admissible starts of class ``name`` (of one phase, or of all)."""
+        return [outcome for t, outcome in judged if classes[name](*angles(t))
+                and (of_phase is None or float(t.params['phase2']) == of_phase)]
+
+    def bound_of(name: str, of_phase: float | None) -> tuple[int, int]:
+        starts = outcomes(name, of_phase)
+        return starts.count('bound'), len(starts)
+
+    def cell(k: int, n: int) -> str:
+        est = wilson(k, n)
+        return f'{k}/{n} ({est.low:.2f}-{est.high:.2f})' if est.n else '-'
+
     columns = [*(f'phase {p:g}' for p in phases), 'all phases']
     table = ['| starts | ' + ' | '.join(f'{c}: bound' for c in columns) + ' | all phases: repelled | all phases: '
              'neither |', '| --- |' + ' --- |' * (len(columns) + 2)]
-    for name, member in BASIN_CLASSES:
-        cells = []
-        for of_phase in [*phases, None]:
-            starts = [outcome for t, outcome in judged
-                      if member(*angles(t)) and (of_phase is None or float(t.params['phase2']) == of_phase)]
-            k = starts.count('bound')
-            est = wilson(k, len(starts))
-            cells.append(f'{k}/{len(starts)} ({est.low:.2f}-{est.high:.2f})' if est.n else '-')
-        starts = [outcome for t, outcome in judged if member(*angles(t))]
-        for kind in ('repelled', 'neither'):
-            est = wilson(starts.count(kind), len(starts))
-            cells.append(f'{starts.count(kind)}/{len(starts)} ({est.low:.2f}-{est.high:.2f})' if est.n else '-')
+    for name, _ in BASIN_CLASSES:
+        starts = outcomes(name)
+        cells = [cell(*bound_of(name, of_phase)) for of_phase in [*phases, None]]
+        cells += [cell(starts.count(kind), len(starts)) for kind in ('repelled', 'neither')]
         table.append(f'| {name} | ' + ' | '.join(cells) + ' |')
+    tests = []
+    for of_phase in [*phases, None]:
+        quadrants = fisher_p(bound_of('theta in quadrants 1, 4', of_phase),
+                             bound_of('theta in quadrants 2, 3', of_phase))
+        normals = fisher_p(bound_of('antiparallel band (90 <= phi <= 270)', of_phase),
+                           bound_of('parallel band (phi < 90 or > 270)', of_phase))
+        tests.append(f'{"all phases" if of_phase is None else f"phase {of_phase:g}"}: quadrants p = {quadrants:.2g}, '
+                     f'normals p = {normals:.2g}')
     return [f'{len(rows)} starts, {len(adm)} admissible: {counts["bound"]} bound (in contact in each of the last '
             f'{tail} periods: the pair keeps colliding to the end), {counts["repelled"]} repelled (centres farther '
             f'apart at the end than twice the robot\'s reach: no shape can touch), {counts["neither"]} neither '
@@ -466,7 +481,9 @@ def section_basin(ctx: Context) -> list[str]:
             f'the last {tail} periods) {earlier} were bound.', '',
             'Bound, repelled and neither starts of each class out of its admissible ones (95 % Wilson interval); '
             'theta on a quadrant '
-            'boundary counts in neither quadrant pair:', '', *table, '', '![basin](basin.png)', '',
+            'boundary counts in neither quadrant pair:', '', *table, '',
+            'Bound shares compared by Fisher\'s exact test (two-sided), quadrants 1, 4 against 2, 3 and the '
+            'antiparallel band against the parallel band: ' + '; '.join(tests) + '.', '', '![basin](basin.png)', '',
             '![basin, polar](basin_polar.png)']
 
 

@@ -246,7 +246,7 @@ def test_end_groups_link_robots_through_their_neighbours() -> None:
 
 def test_the_basin_counts_a_start_bound_only_if_it_keeps_colliding_and_repelled_only_out_of_reach(
         tmp_path: Path) -> None:
-    """P4's rule (issue #11): bound = in contact in each of the last periods; repelled = out of reach at the
+    """P4's rule: bound = in contact in each of the last periods; repelled = out of reach at the
     end; a pair within reach that does not collide every period (e.g. two in-phase robots drifting side by
     side) is neither, though the earlier rule (r < r_bind or contact) counted it bound."""
     from smarticle_experiments.report import basin_outcome
@@ -273,6 +273,8 @@ def test_the_basin_counts_a_start_bound_only_if_it_keeps_colliding_and_repelled_
     assert 'By the earlier rule (r < r_bind or contact in each of the last 5 periods) 2 were bound.' in report
     assert '| theta in quadrants 1, 4 | 1/2 (' in report and '| theta in quadrants 2, 3 | 0/1 (' in report
     assert '| parallel normals (phi 0) | 0/1 (' in report
+    # Fisher's exact test of 1/2 against 0/1, for the quadrants and for the normal bands alike
+    assert 'phase 0: quadrants p = 1, normals p = 1; all phases: quadrants p = 1, normals p = 1.' in report
     within_reach = PairResult.from_dict(pair_result([], bound_at_end=True, out_of_reach_at_end=False))
     assert basin_outcome(within_reach) == 'neither'   # the earlier rule's 'bound' is not enough
 
