@@ -23,6 +23,8 @@ ROBOT_FILL = '#b8b8c0'
 ROBOT_EDGE = '#404048'
 HALT_COLOUR = '#d62728'
 CLASS_FILL = {'C1': '#2a8cff', 'C2': '#ff8c00', 'unclassified': '#bf4de6'}
+#: The animation's scale bar (m): one physical length in every part, whichever robot W stands for.
+SCALE_BAR = 0.05
 
 
 
@@ -80,11 +82,25 @@ def frame_indices(times: np.ndarray, step: float) -> np.ndarray:
     return np.unique(idx)
 
 
+def view_box(part: AnimatedPart) -> tuple[np.ndarray, float]:
+    """Centre (x, y) and half side (m) of the square that holds every robot of ``part`` with its arms."""
+    xy = part.poses[:, :, :2].reshape(-1, 2)
+    lo = np.nanmin(xy, axis=0) - part.spec.reach
+    hi = np.nanmax(xy, axis=0) + part.spec.reach
+    return (lo + hi) / 2.0, max(float(np.max(hi - lo)) / 2.0, 2.0 * part.spec.body_width)
+
+
+def scale_label(spec: RobotSpec) -> str:
+    """The scale bar's label: its length in cm and the W of ``spec`` (its body width) in cm."""
+    return f'{SCALE_BAR * 100:.0f} cm   (W = {spec.body_width * 100:.1f} cm)'
+
+
 def write_animation(parts: Sequence[AnimatedPart], path: Path, step: float = 0.2, fps: int = 20,
                     size_px: int = 420) -> Path:
     """Write a GIF of ``parts`` one after the other: robots as three links, gliders in their class colour with
     a bond between the two, each robot's path once per period, a robot outlined in red while it holds after a
-    halt, the time, the gait period and the halts so far."""
+    halt, the time, the gait period and the halts so far. Every part is drawn at one scale, with a scale bar
+    of ``SCALE_BAR`` metres labelled in centimetres and the part's W (its preset's body width)."""
     import matplotlib
 
     matplotlib.use('Agg')
@@ -101,22 +117,20 @@ def write_animation(parts: Sequence[AnimatedPart], path: Path, step: float = 0.2
 
     writer = BlitGifWriter(fps, fixed_palette([ROBOT_FILL, ROBOT_EDGE, HALT_COLOUR, *CLASS_FILL.values()]))
     path.parent.mkdir(parents=True, exist_ok=True)
+    views = [view_box(part) for part in parts]
+    half = max((h for _, h in views), default=0.0)   # one scale for every part: the bar keeps its length
     with writer.saving(fig, str(path), dpi):
-        for part in parts:
+        for part, (centre, _) in zip(parts, views, strict=True):
             ax.clear()
             ax.set_aspect('equal')
             ax.set_xticks([])
             ax.set_yticks([])
-            width = part.spec.body_length
             xy = part.poses[:, :, :2]
-            lo = np.nanmin(xy.reshape(-1, 2), axis=0) - part.spec.reach
-            hi = np.nanmax(xy.reshape(-1, 2), axis=0) + part.spec.reach
-            centre, half = (lo + hi) / 2.0, max(float(np.max(hi - lo)) / 2.0, 2.0 * width)
             x0, y0 = centre[0] - half, centre[1] - half
             ax.set_xlim(x0, centre[0] + half)
             ax.set_ylim(y0, centre[1] + half)
-            ax.plot([x0 + 0.05 * half, x0 + 0.05 * half + width], [y0 + 0.06 * half] * 2, color='k', lw=2)
-            ax.text(x0 + 0.05 * half, y0 + 0.09 * half, '1 W', fontsize=7)
+            ax.plot([x0 + 0.05 * half, x0 + 0.05 * half + SCALE_BAR], [y0 + 0.06 * half] * 2, color='k', lw=2)
+            ax.text(x0 + 0.05 * half, y0 + 0.09 * half, scale_label(part.spec), fontsize=7)
             fig.suptitle(textwrap.fill(part.label, 64), fontsize=8)
             n = part.poses.shape[1]
             links = [[Polygon(np.zeros((4, 2)), closed=True, fc=ROBOT_FILL, ec=ROBOT_EDGE, lw=0.6, animated=True,
