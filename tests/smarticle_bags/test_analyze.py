@@ -42,6 +42,22 @@ def test_analyze_finds_the_glider_in_a_bag(tmp_path: Path, capsys: pytest.Captur
     assert (tmp_path / 'g.png').stat().st_size > 10_000
 
 
+def test_analyze_writes_nothing_unless_asked(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Reading a bag writes nothing: no figure beside the bag (or anywhere) without --plot."""
+    dt, frames = 0.1, 16 * 40
+    with BagWriter(tmp_path / 'bag', WriterOptions()) as writer:
+        writer.add_topic('/smarticles/poses', 'geometry_msgs/msg/PoseArray')
+        for i in range(frames):
+            writer.write('/smarticles/poses', glider_poses(i, dt), T0 + round(i * dt * 1e9))
+    before = sorted(p for p in tmp_path.rglob('*'))
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main(['analyze', str(tmp_path / 'bag')])
+    out = capsys.readouterr().out
+    assert exit_info.value.code == 0, out
+    assert 'wrote' not in out
+    assert sorted(p for p in tmp_path.rglob('*')) == before
+
+
 def test_analyze_of_a_bag_without_poses_is_a_clear_error(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     with BagWriter(tmp_path / 'bag', WriterOptions()) as writer:
         writer.add_topic('/smarticles/poses', 'geometry_msgs/msg/PoseArray')

@@ -117,7 +117,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--period', type=float, default=GAIT_PERIOD, help=f'gait period (s) (default {GAIT_PERIOD:g})')
     p.add_argument('--min-periods', type=int, default=30,
                    help='bound this many periods makes a glider (default 30, as in the paper)')
-    p.add_argument('--plot', default=None, help='PNG of the gliders (default: <bag>_gliders.png)')
+    p.add_argument('--plot', default=None, metavar='FILE.png',
+                   help='also write a figure of the gliders to this PNG (without it, nothing is written)')
     p = sub.add_parser('check', help='verify every chunk CRC and record of a bag; list damaged chunks',
                        description='Check every record and chunk (CRC) of a bag. Lists each damaged chunk '
                                    'with its byte offset, log-time range and the messages lost per topic. '
@@ -181,13 +182,15 @@ def _analyze(ns: argparse.Namespace) -> int:
               file=sys.stderr)
         return 2
     config = GliderConfig(period=ns.period, min_periods=ns.min_periods)
-    figure = Path(ns.plot) if ns.plot else Path(str(ns.bag).rstrip('/') + '_gliders.png')
+    figure = Path(ns.plot) if ns.plot else None   # reading a bag writes nothing unless asked
     report = glider_report(poses.stamp - poses.stamp[0], poses.xyh, config, figure)
     print(f'{ns.bag}: {poses.xyh.shape[1]} robots, {len(poses.stamp)} pose messages over '
           f'{poses.stamp[-1] - poses.stamp[0]:.1f} s; gliders bound >= {ns.min_periods} periods:')
     print(report.table)
     if report.figure is not None:
         print(f'wrote {report.figure}')
+    elif figure is not None:
+        print(f'no figure written to {figure}: no glider formed')
     return 0
 
 
