@@ -42,6 +42,11 @@ TIME_EPS = 1e-9
 
 ALPHA_MAX_RANGE_DEG = (5.0, 120.0)
 
+#: Quarter boundaries ``SquareGait`` crosses one by one before it jumps: a halt resumes at the next period
+#: boundary (at most 4 quarters on), a new amplitude takes over at the next one, and two more quarters put both
+#: arms on their corners.
+_STEPPED_BOUNDARIES = 8
+
 
 class GaitError(CommonError):
     """An invalid gait setting or call."""
@@ -192,24 +197,43 @@ class SquareGait:
                            math.floor(tau), quarter)
 
     def _advance(self, t: float) -> float:
-        """Move the state machine through every quarter boundary up to clock time ``t``."""
+        """Move the state machine through the quarter boundaries up to clock time ``t``, in constant time.
+
+        A few boundaries are crossed one by one (a halt resumes and a new amplitude takes over at the next
+        period boundary, and the arms reach their corners within two quarters after either); past those the
+        gait is periodic, so the state jumps to two quarters before the last boundary, with the arms on that
+        quarter's corner, and steps the last two. A time a billion seconds after the start costs what the
+        next tick costs.
+        """
         tau = self.gait_time(t)
         if tau < self._last_tau - 1e-12:
             raise GaitError(f'time went backwards: gait time {tau:.6f} after {self._last_tau:.6f}')
         self._last_tau = tau
-        while True:
-            boundary = (self._quarter_count + 1) / 4.0
-            if boundary > tau:
+        last = math.floor(4.0 * tau)          # the global number of the quarter that holds tau
+        for _ in range(_STEPPED_BOUNDARIES):
+            if self._quarter_count >= last:
                 return tau
-            if self._halted:
-                if boundary >= self._resume_tau:
-                    self._halted = False   # resume from the held pose with quarter 0
-            else:
-                self._pos0 = self._position(boundary)
-            self._quarter_count += 1
-            self._tau_event = boundary
-            if self._pending is not None and self._quarter_count % 4 == 0:   # a new period: new amplitude
-                self.config, self._pending = self._pending, None
+            self._cross_boundary()
+        if self._quarter_count + 2 < last and not self._halted and self._pending is None:
+            count = last - 2                  # periodic from here: the arms on the corner of quarter ``count``
+            self._quarter_count, self._tau_event = count, count / 4.0
+            self._pos0 = self.config.corner(count % 4)
+        while self._quarter_count < last:
+            self._cross_boundary()
+        return tau
+
+    def _cross_boundary(self) -> None:
+        """Cross the next quarter boundary: the quarter's end pose becomes the next quarter's start."""
+        boundary = (self._quarter_count + 1) / 4.0
+        if self._halted:
+            if boundary >= self._resume_tau:
+                self._halted = False   # resume from the held pose with quarter 0
+        else:
+            self._pos0 = self._position(boundary)
+        self._quarter_count += 1
+        self._tau_event = boundary
+        if self._pending is not None and self._quarter_count % 4 == 0:   # a new period: new amplitude
+            self.config, self._pending = self._pending, None
 
     def _position(self, tau: float) -> tuple[float, float]:
         """Reference arm angles at gait time ``tau`` within the current quarter."""

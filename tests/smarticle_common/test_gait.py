@@ -184,3 +184,50 @@ def test_a_new_amplitude_starts_at_the_next_period_and_never_jumps() -> None:
     idle = SquareGait(GaitConfig(old))
     idle.set_alpha_max(new)                                             # before the start: at once
     assert idle.config.alpha_max == new and idle.command(0.0).targets == pytest.approx((new, new))
+
+
+def _history(gait: SquareGait, until: float) -> None:
+    """Drive ``gait`` tick by tick (10 ms) to ``until``: a halt at 2.45 s, a new amplitude at 4.0 s."""
+    for i in range(round(until / 0.01) + 1):
+        t = i * 0.01
+        if i == 245:
+            assert gait.halt(t)
+        if i == 400:
+            gait.set_alpha_max(math.radians(60.0))
+        gait.command(t)
+
+
+@pytest.mark.parametrize('phase', [0.0, 0.3])
+@pytest.mark.parametrize('jump_from', [2.5, 4.1, 5.0])       # halted; a new amplitude pending; both behind
+def test_a_jump_over_many_periods_lands_where_ticking_there_does(phase: float, jump_from: float) -> None:
+    """One call far ahead gives what a tick every 10 ms gives, from a halt, a pending amplitude or neither."""
+    ticked, jumped = (SquareGait(GaitConfig.from_degrees(90.0, period=1.6, phase=phase)) for _ in range(2))
+    for gait in (ticked, jumped):
+        gait.start(0.0)
+        _history(gait, jump_from)
+    for t in np.arange(jump_from, 60.0, 0.01):               # tick by tick to 60 s
+        ticked.command(float(t))
+    for t in (60.0 + 0.003, 61.1, 63.33):                    # the jump: straight to 60 s, then on
+        got, want = jumped.command(t), ticked.command(t)
+        assert (got.period_index, got.quarter, got.halted) == (want.period_index, want.quarter, want.halted)
+        assert got.targets == pytest.approx(want.targets, abs=1e-12)
+        assert got.positions == pytest.approx(want.positions, abs=1e-12)
+    assert jumped.config == ticked.config and jumped.pending is None
+
+
+def test_a_time_a_billion_seconds_after_the_start_is_reached_at_once() -> None:
+    """No loop over the elapsed quarters: 1e9 s (2.5e9 quarters) after the start costs what one tick costs."""
+    import time
+
+    config = GaitConfig.from_degrees(60.0, period=1.2, phase=0.3)
+    gait = SquareGait(config)
+    t0 = 1.7e9                                                # a wall-clock start (epoch seconds)
+    gait.start(t0)
+    gait.command(t0 + 1.0)
+    assert gait.halt(t0 + 1.0)
+    began = time.perf_counter()
+    command = gait.command(t0 + 1e9)
+    assert time.perf_counter() - began < 0.05
+    tau = 1e9 / 1.2 + 0.3
+    assert command.period_index == math.floor(tau) and not command.halted
+    assert command.positions == pytest.approx(open_loop_angles(config, tau), abs=1e-6)
