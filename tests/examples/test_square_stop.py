@@ -5,11 +5,12 @@ import numpy as np
 from smarticle_sim.testing import SimWorld
 
 CONTROLLER = 'smarticle_example_controller/square_stop'
+STOP_FORCE = 0.5   # N: the controller's default stop_force, which the test leaves as it is
 
 
 def test_the_robots_walk_and_a_robot_stops_after_a_hard_contact(sim_world: SimWorld) -> None:
     sim_world.start(scene='pair', seed=1, controller=CONTROLLER, fsr=True, joint_states=True,
-                    controller_params={'amplitude_deg': 60.0, 'stop_force': 0.5})
+                    controller_params={'amplitude_deg': 60.0})
     sim_world.step_to(4.0)
 
     # the pair moved
@@ -18,7 +19,7 @@ def test_the_robots_walk_and_a_robot_stops_after_a_hard_contact(sim_world: SimWo
     for robot in (0, 1):
         forces = sim_world.fsr(robot)
         arms = sim_world.joint_states(robot)
-        hard = [stamp for stamp, sample in sorted(forces.items()) if sample.max() > 0.5]
+        hard = [stamp for stamp, sample in sorted(forces.items()) if sample.max() > STOP_FORCE]
         if not hard:
             continue
         stopped += 1
