@@ -33,7 +33,7 @@ def test_an_fsr_impact_holds_the_emulated_servos_until_the_next_period(nodes: An
         # period, so the longer press still halts once, mid-stroke (period 2 + 0.04-0.12 s)
         rig.pulse('arm1_front', 11.0, duration=0.08)
         assert spin_until(probe, lambda: len(rig.observed.halts) >= 1, 5.0), logs()
-        spin_until(probe, lambda: time.time() >= rig.period_start(3) + 0.1, 10.0)
+        spin_until(probe, lambda: time.time() >= rig.period_start(3) + PERIOD / 2, 10.0)
 
         stamp, _, face = rig.observed.halts[0]
         assert face == 'arm1_front'
@@ -42,9 +42,13 @@ def test_an_fsr_impact_holds_the_emulated_servos_until_the_next_period(nodes: An
         assert [r.channel for r in hold] == [0], f'one hold Set Target on arm 1, got {hold}'
         corners = {1500.0 + 600.0 * a for a in (-0.7853981, 0.7853981)}
         assert all(abs(hold[0].pulse_us - c) > 5.0 for c in corners), 'the hold target lies between the corners'
-        resumed = rig.targets_between(rig.period_start(3) - 0.05, rig.period_start(3) + 0.1)
-        assert any(r.channel == 0 for r in resumed), (
-            f'arm 1 resumes at the next period; targets after the hold: {rig.targets_between(stamp, time.time())}')
+        # arm 1 resumes in the next period: its first target after the hold reaches the board (the emulator's own
+        # record) no earlier than the period's start and within its first half; the gait sends it at the start, and
+        # on a loaded machine the bridge's forwarding can take well over 100 ms
+        after = [r for r in rig.targets_between(stamp, rig.period_start(3) + PERIOD / 2) if r.channel == 0][1:]
+        assert after, f'arm 1 resumes at the next period; targets after the hold: {rig.targets_between(stamp, time.time())}'
+        assert rig.period_start(3) - 0.05 <= rig.wall(after[0]) < rig.period_start(3) + PERIOD / 2, (
+            rig.wall(after[0]) - rig.period_start(3))
         assert len(rig.observed.halts) == 1, 'one impact, one halt'
 
 
