@@ -46,7 +46,7 @@ def test_an_fsr_impact_holds_the_emulated_servos_until_the_next_period(nodes: An
         # record) no earlier than the period's start and within its first half; the gait sends it at the start, and
         # on a loaded machine the bridge's forwarding can take well over 100 ms
         after = [r for r in rig.targets_between(stamp, rig.period_start(3) + PERIOD / 2) if r.channel == 0][1:]
-        assert after, f'arm 1 resumes at the next period; targets after the hold: {rig.targets_between(stamp, time.time())}'
+        assert after, f'arm 1 resumes in the next period; after the hold: {rig.targets_between(stamp, time.time())}'
         assert rig.period_start(3) - 0.05 <= rig.wall(after[0]) < rig.period_start(3) + PERIOD / 2, (
             rig.wall(after[0]) - rig.period_start(3))
         assert len(rig.observed.halts) == 1, 'one impact, one halt'
