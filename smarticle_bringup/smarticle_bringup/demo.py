@@ -27,10 +27,10 @@ import sys
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
-from smarticle_common.cli import add_version
+from smarticle_common.cli import SeedSyntaxError, add_version, parse_seeds
 from smarticle_common.facts import GAIT_PERIOD, PRESETS, RobotSpec
 from smarticle_common.runs import Recording, save_npz
 
@@ -52,11 +52,31 @@ LIMITS = ("[demo] not reproduced: the paper's robots start in phase and form tra
           f'exactly in phase settle still, and a halt does not hold a C2 pair together: {PHYSICS_DOC}')
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse whose refusal is one line, ``PROG: error: ...``, and exit code 2."""
+
+    def error(self, message: str) -> NoReturn:
+        """Print ``prog: error: message`` on one line and exit 2."""
+        sys.stderr.write(f'{self.prog}: error: {message}\n')
+        raise SystemExit(2)
+
+
+def one_seed(text: str) -> int:
+    """A seed as the stack's seed syntax takes it (a whole number >= 0; argparse ``type=``)."""
+    try:
+        seeds = parse_seeds(text)
+    except SeedSyntaxError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
+    if len(seeds) != 1:
+        raise argparse.ArgumentTypeError(f'one seed, got {text!r}')
+    return seeds[0]
+
+
 def build_parser(prog: str = 'smarticle-demo') -> argparse.ArgumentParser:
     """Command-line options of the demo; ``prog`` is the name the user typed (``demo.sh`` or ``smarticle-demo``)."""
-    parser = argparse.ArgumentParser(prog=prog, description=__doc__.split('\n')[0] if __doc__ else None)
+    parser = _Parser(prog=prog, description=__doc__.split('\n')[0] if __doc__ else None)
     add_version(parser, 'smarticle_bringup')
-    parser.add_argument('--seed', type=int, default=1,
+    parser.add_argument('--seed', type=one_seed, default=1,
                         help='seed of both starts (the jitter of the pair coordinates; default 1)')
     parser.add_argument('--periods', type=float, default=GLIDERS.periods,
                         help=f'part 1 (gliders): gait periods to run (default {GLIDERS.periods:g})')
@@ -94,6 +114,40 @@ def build_parser(prog: str = 'smarticle-demo') -> argparse.ArgumentParser:
     parser.add_argument('--view-port', type=int, default=8765, help='WebSocket port of --view (default 8765)')
     parser.add_argument('--out', type=Path, default=Path('out/demo'), help='output folder (default out/demo)')
     return parser
+
+
+def option_problem(args: argparse.Namespace) -> str | None:
+    """The first bad option as one line, or None. An option that becomes a node's parameter is checked with that
+    parameter's own range (the sim bridge's table; the gait's amplitude range is the same ``ALPHA_MAX_RANGE_DEG``),
+    so the demo refuses what the nodes would refuse, before anything starts."""
+    from smarticle_common.params import ParameterError, ParamSpec
+    from smarticle_sim.bridge import PARAMS as BRIDGE_PARAMS
+
+    bridge = {spec.name: spec for spec in BRIDGE_PARAMS}
+    for option in ('--periods', '--feedback-periods', '--frame-step'):
+        value = getattr(args, option[2:].replace('-', '_'))
+        if not (math.isfinite(value) and value > 0):
+            return f'{option} must be a number > 0, got {value:g}'
+    sim = 'the sim bridge parameter'
+    checks: list[tuple[str, str, ParamSpec, Any]] = [
+        ('--alpha-max', 'the gait and sim bridge parameter', bridge['alpha_max_deg'], args.alpha_max),
+        ('--periods', sim, bridge['duration'], args.periods * GAIT_PERIOD),
+        ('--feedback-periods', sim, bridge['duration'], args.feedback_periods * GAIT_PERIOD),
+        ('--seed', sim, bridge['seed'], args.seed),
+        ('--robots', sim, bridge['robots'], args.robots),
+        ('--phase-jitter', sim, bridge['phase_jitter'], args.phase_jitter),
+        ('--phase-offset', 'the gait and sim bridge parameter', bridge['pair_phase_1'], args.phase_offset)]
+    if args.view:
+        from .view_node import PARAMS as VIEW_PARAMS
+
+        checks.append(('--view-port', 'the live view parameter', next(s for s in VIEW_PARAMS if s.name == 'port'),
+                       args.view_port))
+    for option, node, spec, value in checks:
+        try:
+            spec.check(value, source=node)
+        except ParameterError as err:
+            return f'{option}: {err}'
+    return None
 
 
 @dataclass(frozen=True)
@@ -431,16 +485,14 @@ def main(argv: list[str] | None = None, prog: str = 'smarticle-demo') -> int:
     from .demo_figures import AnimatedPart, GliderSpan, write_animation
 
     args = build_parser(prog).parse_args(argv)
-    if args.robots < 1 or args.periods <= 0 or args.feedback_periods <= 0 or args.frame_step <= 0:
-        print('demo: --robots must be >= 1, --periods, --feedback-periods and --frame-step > 0', file=sys.stderr)
-        return 2
-    if not (math.isfinite(args.phase_offset) and 0.0 <= args.phase_offset < 1.0):
-        print('demo: --phase-offset must be a fraction of a period in [0, 1)', file=sys.stderr)
+    problem = option_problem(args)
+    if problem is not None:
+        print(f'{prog}: error: {problem}', file=sys.stderr)
         return 2
     try:
         parts = plan_parts(args)
     except SceneError as err:
-        print(f'demo: {err}', file=sys.stderr)
+        print(f'{prog}: error: {err}', file=sys.stderr)
         return 2
     if args.scene == 'pair' and args.only != 'feedback':
         print(CHOICE, flush=True)

@@ -219,11 +219,55 @@ def test_clock_noise_gives_each_robot_the_batch_paths_clock_offset(tmp_path: Pat
     assert all('clock_rate_offset' not in data[f'/smarticle_{k}/gait']['ros__parameters'] for k in range(2))
 
 
-def test_dense_start_and_bad_options() -> None:
-    from smarticle_bringup.demo import build_parser, main, plan_parts
+def test_dense_start() -> None:
+    from smarticle_bringup.demo import build_parser, plan_parts
 
     parts = plan_parts(build_parser().parse_args(['--scene', 'dense', '--robots', '5', '--only', 'gliders']))
     assert [(p.scene_kind, p.robots, p.feedback) for p in parts] == [('dense', 5, False)]
     assert len({p['phase'] for p in parts[0].own}) == 5          # the dense start's phase jitter
-    assert main(['--phase-offset', '1.5']) == 2
-    assert main(['--periods', '0']) == 2
+
+
+#: Bad demo options -> what the one line must name (the option and, where a node's range decides, its parameter).
+BAD_OPTIONS = {
+    '--alpha-max nan': ('--alpha-max', "'alpha_max_deg': NaN"),
+    '--alpha-max 200': ('--alpha-max', 'above the maximum 120'),
+    '--alpha-max 2': ('--alpha-max', 'below the minimum 5'),
+    '--periods nan': ('--periods', 'nan'),
+    '--periods 0': ('--periods', '> 0'),
+    '--periods 1e9': ('--periods', "'duration'"),
+    '--feedback-periods -1': ('--feedback-periods', '> 0'),
+    '--seed -1': ('--seed', 'non-negative'),
+    '--seed 1.5': ('--seed', "'1.5'"),
+    '--robots 0': ('--robots', 'below the minimum 1'),
+    '--phase-offset 1.5': ('--phase-offset', "'pair_phase_1'"),
+    '--phase-jitter nan': ('--phase-jitter', 'NaN'),
+    '--frame-step inf': ('--frame-step', '> 0'),
+    '--view --view-port 70000': ('--view-port', 'above the maximum 65535'),
+    '--alpha-max x': ('--alpha-max', "'x'"),
+}
+
+
+@pytest.mark.parametrize('options', sorted(BAD_OPTIONS))
+def test_a_bad_option_is_one_line_and_exit_2_before_anything_starts(options: str, tmp_path: Path,
+                                                                     capsys: pytest.CaptureFixture[str]) -> None:
+    """Each option checked as the node parameter it becomes checks it: one line naming it, exit 2, nothing run."""
+    from smarticle_bringup.demo import main
+
+    out = tmp_path / 'demo'
+    try:
+        code = main([*options.split(), '--out', str(out)], prog='demo.sh')
+    except SystemExit as exc:   # argparse's own refusals (not a number, not a seed)
+        code = int(exc.code or 0)
+    err = capsys.readouterr().err
+    option, cause = BAD_OPTIONS[options]
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert err.startswith('demo.sh: error: ') and option in err and cause in err, err
+    assert not out.exists()
+
+
+def test_a_bad_option_from_the_shell_is_one_line_without_a_traceback(tmp_path: Path) -> None:
+    proc = subprocess.run([sys.executable, '-m', 'smarticle_bringup.demo', '--alpha-max', 'nan', '--out',
+                           str(tmp_path / 'demo')], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2 and proc.stdout == '', proc.stdout
+    assert proc.stderr.splitlines() == ["demo.sh: error: --alpha-max: the gait and sim bridge parameter "
+                                        "'alpha_max_deg': NaN is not allowed"], proc.stderr
