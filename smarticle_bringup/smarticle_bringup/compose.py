@@ -74,6 +74,18 @@ def plan_nodes(words: Sequence[str]) -> list[Any]:
     return list(plan.nodes)
 
 
+def file_words(words: Sequence[str]) -> list[str]:
+    """The ``[PACKAGE] FILE [name:=value ...]`` part of the host's command line (``--executor NAME`` and
+    ``--ros-args ...`` left out)."""
+    words = list(words)
+    if '--ros-args' in words:
+        words = words[:words.index('--ros-args')]
+    if '--executor' in words:
+        at = words.index('--executor')
+        words = words[:at] + words[at + 2:]
+    return words
+
+
 def host(actions: Sequence[Any], args: list[str] | None = None,
          executor_factory: Callable[[], Any] | None = None) -> int:
     """Build every node of ``actions`` in this process, run them on one executor; return the exit code.

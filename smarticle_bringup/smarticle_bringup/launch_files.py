@@ -43,6 +43,8 @@ from pathlib import Path
 from typing import Any
 from xml.parsers import expat
 
+from smarticle_common.params import ParameterError, check_params_file
+
 from .errors import BringupError
 
 #: How deep includes may nest (a self-including file that never stops ends here): enough for the sim
@@ -305,6 +307,8 @@ class Scope:
     path: Path
     namespace: str = ''
     depth: int = 0
+    #: The names ``$(var)`` has resolved, in order (which arguments an expression used).
+    used: list[str] = field(default_factory=list)
 
     def child(self) -> Scope:
         """A copy for a ``<group>``: what it sets does not leak out."""
@@ -320,8 +324,26 @@ class Scope:
                 return ''.join(out)
             out.append(text[i:j])
             end = _matching(text, j)
-            out.append(self._one(self.substitute(text[j + 2:end])))
+            raw = text[j + 2:end]
+            out.append(self._eval(raw) if raw.split(None, 1)[:1] == ['eval'] else self._one(self.substitute(raw)))
             i = end + 1
+
+    def _eval(self, raw: str) -> str:
+        """``$(eval ...)`` whose text is ``raw``; if it fails, the ValueError names the argument whose value
+        broke it (the one that, set to 1, makes the expression work)."""
+        first = len(self.used)
+        try:
+            return self._one(self.substitute(raw))
+        except ValueError as err:
+            for name in dict.fromkeys(self.used[first:]):
+                trial = Scope({**self.values, name: '1'}, self.path, self.namespace, self.depth)
+                try:
+                    trial._one(trial.substitute(raw))
+                except ValueError:
+                    continue
+                raise ValueError(f'argument {name} has a value this file cannot use, {self.values[name]!r} '
+                                 f'({err})') from None
+            raise
 
     def _one(self, body: str) -> str:
         if body.split(None, 1)[:1] == ['eval']:
@@ -336,6 +358,7 @@ class Scope:
         if kind == 'var' and len(rest) == 1:
             if rest[0] not in self.values:
                 raise ValueError(f'$(var {rest[0]}): no argument or let of that name')
+            self.used.append(rest[0])
             return self.values[rest[0]]
         if kind == 'find-pkg-share' and len(rest) == 1:
             try:
@@ -510,7 +533,11 @@ class _Reader:
         on_exit = self.attr(scope, element, 'on_exit', required=False)
         if on_exit not in (None, 'shutdown'):
             raise self.fail(scope, element, f'on_exit="{on_exit}": only "shutdown" is supported')
-        args = tuple(shlex.split(self.attr(scope, element, 'args', required=False) or ''))
+        text = self.attr(scope, element, 'args', required=False) or ''
+        try:
+            args = tuple(shlex.split(text))
+        except ValueError as err:     # an argument's value with an unmatched quote
+            raise self.fail(scope, element, f'args="{text}": {err}') from None
         params: list[ParamFile | ParamValue] = []
         remaps: list[tuple[str, str]] = []
         for child in element.children:
@@ -528,6 +555,10 @@ class _Reader:
                 path = path if path.is_absolute() else scope.path.parent / path
                 if not path.is_file():
                     raise self.fail(scope, child, f'parameter file {path} does not exist')
+                try:
+                    check_params_file(str(path))
+                except ParameterError as err:
+                    raise self.fail(scope, child, str(err)) from None
                 params.append(ParamFile(str(path)))
             else:
                 pname, value = self.attr(scope, child, 'name'), self.attr(scope, child, 'value')

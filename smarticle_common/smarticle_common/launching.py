@@ -1,15 +1,21 @@
 """Start the stack's executables as separate processes and stop them together (a small stand-in for
 ``ros2 launch``, which is not available from PyPI). Used by the demo, the benchmarks and the tests.
+
+Also what a launcher reads back from the processes' output: the one-line reason a process failed
+(``failure_reason``) and the nodes' exit summaries (``summary_line`` writes one, ``gather_summaries``
+merges them per robot).
 """
 
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import signal
 import subprocess
 import sys
 import time
+from collections.abc import Mapping
 from pathlib import Path
 from typing import IO
 
@@ -84,12 +90,16 @@ class ProcessGroup:
         self.procs.append((proc, log, handle))
         return proc
 
-    def output(self, proc: subprocess.Popen[bytes]) -> str:
-        """Return what ``proc`` has printed so far."""
+    def log_of(self, proc: subprocess.Popen[bytes]) -> Path:
+        """The log file of ``proc`` (KeyError if this group did not start it)."""
         for candidate, log, _ in self.procs:
             if candidate is proc:
-                return log.read_text(errors='replace')
+                return log
         raise KeyError('process not started by this group')
+
+    def output(self, proc: subprocess.Popen[bytes]) -> str:
+        """Return what ``proc`` has printed so far."""
+        return self.log_of(proc).read_text(errors='replace')
 
     def stop_all(self, grace: float = 5.0) -> None:
         """SIGINT every running process, SIGKILL what is left after ``grace`` seconds, close the logs."""
@@ -111,3 +121,73 @@ class ProcessGroup:
 
     def __exit__(self, *exc: object) -> None:
         self.stop_all()
+
+
+# ---------------------------------------------------------------------------------------------- what a log says
+#: A line of rclpy's console log: ``[LEVEL] [stamp] [logger]: message``.
+_LOG_LINE = re.compile(r'^\[(DEBUG|INFO|WARN|WARNING|ERROR|FATAL)\] \[[\d.]+\] \[([^\]]*)\]: (.*)$')
+#: rcl's source locations inside an error message (``, at /project/src/parse.c:782``): noise to a user.
+_RCL_WHERE = re.compile(r',? at /\S+:\d+')
+#: rcl's log lines can follow a traceback's last line without a line break.
+_GLUED_LOG = re.compile(r'\[(ERROR|FATAL|WARN|INFO)\] \[[\d.]+\].*$')
+#: The marker of a node's exit summary line (``summary_line``).
+SUMMARY = 'summary: '
+
+
+def _one_line(text: str) -> str:
+    """``text`` as one line: rcl's source locations dropped, whitespace collapsed."""
+    return ' '.join(_RCL_WHERE.sub('', text).split())
+
+
+def failure_reason(output: str) -> str | None:
+    """The error a failed process printed, as one line: the last traceback's message and last frame, else
+    its last ERROR or FATAL log line, else its last line (None without output)."""
+    lines = output.splitlines()
+    start = max((i for i, line in enumerate(lines) if line.startswith('Traceback (most recent call last)')),
+                default=None)
+    if start is not None:
+        frame, message = '', ''
+        for line in lines[start + 1:]:
+            if line.startswith('  File "'):
+                frame, message = line.strip(), ''
+            elif line.strip() and not line.startswith(' ') and not message:
+                message = _GLUED_LOG.sub('', line)
+        if message:
+            return _one_line(f'{message} ({frame})' if frame else message)
+    for line in reversed(lines):
+        match = _LOG_LINE.match(line.strip())
+        if match and match.group(1) in ('ERROR', 'FATAL'):
+            return _one_line(f'[{match.group(2)}] {match.group(3)}')
+    last = next((line for line in reversed(lines) if line.strip()), None)
+    return None if last is None else _one_line(last)
+
+
+def summary_line(robot: int | None, counts: Mapping[str, object]) -> str:
+    """A node's exit summary for the launcher to gather: ``summary: robot 3: commands 96, halts 2``; without
+    a robot, ``summary: <text>`` (the glider report)."""
+    body = ', '.join(f'{key} {value}' for key, value in counts.items())
+    return f'{SUMMARY}robot {robot}: {body}' if robot is not None else f'{SUMMARY}{body}'
+
+
+def gather_summaries(outputs: list[str]) -> tuple[dict[int, dict[str, str]], list[str]]:
+    """The exit summaries in the processes' ``outputs``: each robot's counts merged (a count that two nodes
+    give keeps the larger), and the other summary lines in order."""
+    robots: dict[int, dict[str, str]] = {}
+    others: list[str] = []
+    for output in outputs:
+        for line in output.splitlines():
+            match = _LOG_LINE.match(line.strip())
+            if match is None or not match.group(3).startswith(SUMMARY):
+                continue
+            text = match.group(3)[len(SUMMARY):]
+            robot = re.match(r'robot (\d+): (.*)$', text)
+            if robot is None:
+                others.append(text)
+                continue
+            counts = robots.setdefault(int(robot.group(1)), {})
+            for item in robot.group(2).split(', '):
+                key, _, value = item.rpartition(' ')
+                old = counts.get(key)
+                if key and (old is None or (old.isdigit() and value.isdigit() and int(value) > int(old))):
+                    counts[key] = value
+    return dict(sorted(robots.items())), others

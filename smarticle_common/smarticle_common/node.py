@@ -32,7 +32,7 @@ from rclpy.parameter import Parameter
 
 from . import topics
 from .cli import version_of
-from .params import ParameterError, ParamSpec
+from .params import ParameterError, ParamSpec, check_params_file, params_files
 
 #: Diagnostic levels (diagnostic_msgs/DiagnosticStatus).
 OK, WARN, ERROR = 0, 1, 2
@@ -292,6 +292,12 @@ def run_node(factory: Callable[[], Node], node_name: str, args: list[str] | None
 def _init_and_run(factory: Callable[[], Node], node_name: str, args: list[str] | None,
                   startup_errors: tuple[type[BaseException], ...]) -> int:
     """``run_node`` once its signal handler is in place: init, build, run or spin, destroy, shut down."""
+    try:     # a malformed parameter file: one line naming the file and line, not rcl's traceback
+        for path in params_files(sys.argv if args is None else args):
+            check_params_file(path)
+    except ParameterError as err:
+        rclpy.logging.get_logger(node_name).fatal(f'cannot start: {err}')
+        return 2
     rclpy.init(args=args)
     # A signal that lands while rclpy's executor is handing a message to a callback leaves that callback's
     # coroutine unstarted; Python reports it when it is collected at exit. The message arrived during

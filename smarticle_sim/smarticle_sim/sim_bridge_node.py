@@ -40,6 +40,8 @@ def _msg(key: str) -> Any:
 
 #: Wall seconds the bridge waits after the awaited subscribers have matched (their side of the match).
 SUBSCRIBER_SETTLE = 0.5
+#: Lock-step: wall seconds between two looks, while waiting for commands, at who publishes them.
+COMMANDER_CHECK = 0.5
 
 
 class SimBridgeNode(Node):
@@ -90,6 +92,8 @@ class SimBridgeNode(Node):
         self.commands_received = 0
         self.reported: set[tuple[str, int]] = set()   # (cause, robot) of bad inputs already logged
         self.warned_ids: set[int] = set()
+        #: Robots whose joint commands topic has had a publisher (a commander that may since have exited).
+        self.commanded: set[int] = set()
         #: hold:=true: the sim time (ns) up to which a test lets the lock-step run (None: not yet given).
         self.run_until_ns: int | None = None
         if self.settings.hold:
@@ -331,6 +335,8 @@ class SimBridgeNode(Node):
         """
         timeout = self.settings.start_timeout if first else self.settings.tick_timeout
         started = last = time.monotonic()
+        # wall time of the last look at the ROS graph for commanders that have gone
+        looked = started
         told = 0.0   # wall time of the last 'held' diagnostics
         seen = -1    # commands received when ``missing`` was last computed (only a command can shorten it)
         while rclpy.ok():
@@ -347,6 +353,11 @@ class SimBridgeNode(Node):
             now = time.monotonic()
             if missing and timeout > 0.0 and now - started > timeout:
                 return self.missed_tick(missing, timeout)
+            if missing and now - looked >= COMMANDER_CHECK:
+                looked = now
+                gone = self.gone_commanders(missing)
+                if gone:
+                    return gone
             if now - last > 0.5:  # a gait node that joined late missed the (best-effort) clock: resend
                 clock = self.Clock()
                 clock.clock = Time(nanoseconds=self.core.time_ns).to_msg()
@@ -357,6 +368,20 @@ class SimBridgeNode(Node):
                     self.get_logger().warning(f'lock-step: waiting for joint commands of robots {missing} '
                                               f'at sim time {self.core.time:.3f} s', throttle_duration_sec=5.0)
         return None
+
+    def gone_commanders(self, missing: list[int]) -> str | None:
+        """The line of robots whose commands nobody publishes any more (a publisher was seen, now none is),
+        or None: the node that answered for the robot has exited, so the lock-step would wait in vain."""
+        gone = []
+        for k in missing:
+            if self.count_publishers(topics.topic('joint_commands', k)) > 0:
+                self.commanded.add(k)
+            elif k in self.commanded or self.core.command_stamp_ns[k] >= 0:   # it sent commands: it was there
+                gone.append(k)
+        if not gone:
+            return None
+        return ('lock-step: ' + '; '.join(f'the node publishing {topics.topic("joint_commands", k)} (robot {k}) has '
+                                          'exited' for k in gone) + f' at sim time {self.core.time:.3f} s: stopping')
 
     def missed_tick(self, missing: list[int], timeout: float) -> str:
         """The one line of a missed tick: which node (robot) did not answer which tick, how long it was given."""

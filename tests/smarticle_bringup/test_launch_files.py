@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+import os
 from pathlib import Path
 
 import pytest
@@ -194,12 +196,22 @@ BAD = {
     'bad eval': ("<launch>\n<let name='x' value=\"$(eval 'open(1)')\"/>\n</launch>", 2, 'is not supported'),
     'runaway include': ('<launch>\n<include file="$(dirname)/bad.launch.xml"/>\n</launch>', 2,
                         'includes nest deeper than'),
+    'malformed parameter file': ('<launch>\n<node pkg="smarticle_driver" exec="gait">\n'
+                                 '  <param from="malformed.yaml"/>\n</node>\n</launch>', 3,
+                                 'malformed.yaml:4: malformed YAML in the parameter file'),
+    'bad argument value': ('<launch>\n<arg name="robots" default="two"/>\n<arg name="robot" default="0"/>\n'
+                           "<let name='more' value=\"$(eval '$(var robot) + 1 &lt; $(var robots)')\"/>\n</launch>",
+                           4, "argument robots has a value this file cannot use, 'two'"),
+    'unmatched quote in args': ('<launch>\n<arg name="who" default="a\'b"/>\n'
+                                '<node pkg="smarticle_driver" exec="gait" args="$(var who)"/>\n</launch>', 3,
+                                'No closing quotation'),
 }
 
 
 @pytest.mark.parametrize('case', sorted(BAD))
 def test_bad_input_is_one_line_naming_file_and_line(case: str, tmp_path: Path) -> None:
     text, line, message = BAD[case]
+    write(tmp_path, 'malformed.yaml', '/**:\n  ros__parameters:\n    period: [1.6\n    alpha_max_deg: 3\n')
     path = write(tmp_path, 'bad.launch.xml', text)
     with pytest.raises(LaunchFileError) as err:
         resolve(path)
@@ -228,6 +240,43 @@ def test_the_launcher_exits_2_with_one_line_and_starts_nothing(words: list[str],
     err = capsys.readouterr().err.strip()
     assert code == 2 and err.startswith('smarticle-launch: ') and '\n' not in err, err
     assert not logs.exists()                        # no process was started (none has a log)
+
+
+@pytest.mark.parametrize('words, says', [
+    (['robots:=two'], "sim_robots.launch.xml:60: argument robots has a value this file cannot use, 'two'"),
+    (['robots:=two', 'composed:=false'], "argument robots has a value this file cannot use, 'two'"),
+    (['params_file:={bad}'], 'bad.yaml:4: malformed YAML in the parameter file'),
+    (['params_file:={bad}', 'composed:=false'], 'bad.yaml:4: malformed YAML in the parameter file'),
+])
+def test_a_bad_argument_value_or_parameter_file_is_one_line_and_starts_nothing(
+        words: list[str], says: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Composed too: the launcher reads the host's own launch file and its parameter files before it starts."""
+    bad = write(tmp_path, 'bad.yaml', '/**:\n  ros__parameters:\n    period: [1.6\n    alpha_max_deg: 3\n')
+    logs = tmp_path / 'logs'
+    code = launcher.main(['smarticle_bringup', 'sim.launch.xml', *(w.format(bad=bad) for w in words),
+                          '--log-dir', str(logs)])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and err.startswith('smarticle-launch: ') and '\n' not in err and says in err, err
+    assert not logs.exists()
+
+
+def test_a_controller_is_looked_up_in_its_own_package_only(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A program of the executable's name elsewhere on PATH is never taken for it."""
+    fake_bin = tmp_path / 'bin'
+    fake_bin.mkdir()
+    impostor = fake_bin / 'fold'
+    impostor.write_text('#!/bin/sh\nexit 0\n')
+    impostor.chmod(0o755)
+    monkeypatch.setenv('PATH', f'{fake_bin}:{os.environ["PATH"]}')
+    monkeypatch.setenv('AMENT_PREFIX_PATH', str(tmp_path / 'ros'))
+    node = resolve(LAUNCH / 'board.launch.xml', {'controller': 'smarticle_example_controller/square_stop'},
+                   check_executables=False).nodes[1]
+    assert launcher.executable_path(node).endswith('/square_stop')
+    with pytest.raises(LaunchFileError) as err:
+        launcher.executable_path(dataclasses.replace(node, executable='fold'))
+    text = str(err.value)
+    assert "executable 'fold' of package 'smarticle_example_controller' not found" in text and '\n' not in text
+    assert f'looked in {tmp_path}/ros/lib/smarticle_example_controller' in text and str(impostor) not in text
 
 
 def test_the_composer_refuses_a_node_it_cannot_host(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
