@@ -91,18 +91,19 @@ def host(actions: Sequence[Any], args: list[str] | None = None,
     """Build every node of ``actions`` in this process, run them on one executor; return the exit code.
 
     The Jazzy idiom, for many nodes: ``rclpy.init``; build; run or spin; on Ctrl-C (which shuts the
-    context down, as in ``run_node``) or external shutdown stop quietly; finally destroy every node and
+    context down, as in ``run_node``; a callback still busy 0.7 s after the signal ends the process) or
+    external shutdown stop quietly; finally destroy every node and
     ``try_shutdown``. A startup error of a node (bad parameter, a file or port that cannot be opened) is
     logged as fatal and gives exit code 2.
     """
     from smarticle_common.node import SigintShutsDown
 
-    with SigintShutsDown():
-        return _init_and_host(actions, args, executor_factory)
+    with SigintShutsDown(NAME) as signals:
+        return _init_and_host(actions, args, executor_factory, signals)
 
 
 def _init_and_host(actions: Sequence[Any], args: list[str] | None,
-                   executor_factory: Callable[[], Any] | None) -> int:
+                   executor_factory: Callable[[], Any] | None, signals: Any) -> int:
     """``host`` once its signal handler is in place."""
     import rclpy
     from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
@@ -144,6 +145,7 @@ def _init_and_host(actions: Sequence[Any], args: list[str] | None,
         if not ended_by_signal():
             raise
     finally:
+        signals.returned()     # the watchdog of a busy callback stands down: clean-up may take its time
         for node in reversed(nodes):
             node.destroy_node()
         rclpy.try_shutdown()

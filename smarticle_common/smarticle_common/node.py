@@ -236,33 +236,75 @@ def ended_by_signal(timeout: float = _SIGNAL_SHUTDOWN_S) -> bool:
     return True
 
 
-class SigintShutsDown:
-    """SIGINT (Ctrl-C) ends a node like SIGTERM: rclpy's own handler shuts the context down and wakes the
-    executor, and Python raises no KeyboardInterrupt inside rclpy's code (where it surfaces as pybind11's
-    "Unable to convert call argument", as "Exception ignored in Future.__del__" or as an unstarted
-    callback). A second Ctrl-C raises KeyboardInterrupt, for a callback that does not return.
+#: Seconds a node has, after SIGINT or SIGTERM, for its executor to return before the process ends anyway.
+SIGNAL_GRACE_S = 0.7
 
-    Installed before ``rclpy.init``, which chains its handler to this one; the previous handler is put back
+
+class SigintShutsDown:
+    """SIGINT (Ctrl-C) ends a node like SIGTERM, and either ends it within a second even if a callback is busy.
+
+    rclpy's own handler shuts the context down and wakes the executor, and Python raises no
+    KeyboardInterrupt inside rclpy's code (where it surfaces as pybind11's "Unable to convert call
+    argument", as "Exception ignored in Future.__del__" or as an unstarted callback). A callback that does
+    not return (a stuck driver call, a loop) would keep the executor, and the process, alive: after either
+    signal a watchdog gives the executor ``grace`` seconds to return (``returned``), then logs one line
+    saying a callback was still busy and ends the process with exit code 0, as a signal's end is. A second
+    Ctrl-C raises KeyboardInterrupt at once, for a callback that does not return.
+
+    Installed before ``rclpy.init``, which chains its handlers to these; the previous handlers are put back
     on exit. Outside the main thread (where Python allows no handler) it does nothing.
     """
 
-    def __init__(self) -> None:
-        self.previous: Any = None
+    def __init__(self, name: str = 'node', grace: float = SIGNAL_GRACE_S) -> None:
+        self.name, self.grace = name, grace
+        self.previous: dict[int, Any] = {}
         self.presses = 0
+        self._watchdog: threading.Timer | None = None
+        self._returned = threading.Event()
 
     def __enter__(self) -> SigintShutsDown:
         if threading.current_thread() is threading.main_thread():
-            self.previous = signal.signal(signal.SIGINT, self._on_sigint)
+            for signum in (signal.SIGINT, signal.SIGTERM):
+                self.previous[signum] = signal.signal(signum, self._on_signal)
         return self
 
-    def _on_sigint(self, signum: int, frame: Any) -> None:
-        self.presses += 1
-        if self.presses > 1:
-            raise KeyboardInterrupt
+    def _on_signal(self, signum: int, frame: Any) -> None:
+        if self._watchdog is None and not self._returned.is_set():
+            self._watchdog = threading.Timer(self.grace, self._expire, (signal.Signals(signum).name,))
+            self._watchdog.daemon = True
+            self._watchdog.start()
+        if signum == signal.SIGINT:
+            self.presses += 1
+            if self.presses > 1:
+                raise KeyboardInterrupt
+
+    def returned(self) -> None:
+        """The executor has returned: the watchdog stands down (the node's own clean-up may take its time)."""
+        self._returned.set()
+        if self._watchdog is not None:
+            self._watchdog.cancel()
+
+    def _expire(self, signame: str) -> None:
+        """The grace has passed and the executor has not returned: end the process (exit code 0)."""
+        if self._returned.is_set():
+            return
+        message = (f'{signame}: a callback was still busy {self.grace:g} s after the signal; ending the process '
+                   'without waiting for it')
+        try:
+            rclpy.logging.get_logger(self.name).warning(message)
+        except (RuntimeError, ValueError):    # rcutils logging already gone: the line goes to stderr instead
+            print(f'[WARN] [{self.name}]: {message}', file=sys.stderr)
+        for stream in (sys.stdout, sys.stderr):
+            try:
+                stream.flush()
+            except (OSError, ValueError):
+                pass
+        os._exit(0)
 
     def __exit__(self, *exc: object) -> None:
-        if self.previous is not None:
-            signal.signal(signal.SIGINT, self.previous)
+        self.returned()
+        for signum, handler in self.previous.items():
+            signal.signal(signum, handler)
 
 
 def run_node(factory: Callable[[], Node], node_name: str, args: list[str] | None = None,
@@ -281,16 +323,17 @@ def run_node(factory: Callable[[], Node], node_name: str, args: list[str] | None
     context down under the executor, or is about to (Jazzy's races, e.g. "failed to initialize wait set",
     or pybind11's "Unable to convert call argument" when the signal lands in a message's conversion), is a
     clean exit, like KeyboardInterrupt: it counts if the context is shut down within a second of the error.
-    Ctrl-C shuts the context down as SIGTERM does (a second one raises KeyboardInterrupt).
+    Ctrl-C shuts the context down as SIGTERM does (a second one raises KeyboardInterrupt); after either, a
+    callback that keeps the executor from returning for ``SIGNAL_GRACE_S`` ends the process (exit code 0).
     """
     if _answer_help_or_version(factory, node_name, args, params):
         return 0
-    with SigintShutsDown():
-        return _init_and_run(factory, node_name, args, startup_errors)
+    with SigintShutsDown(node_name) as signals:
+        return _init_and_run(factory, node_name, args, startup_errors, signals)
 
 
 def _init_and_run(factory: Callable[[], Node], node_name: str, args: list[str] | None,
-                  startup_errors: tuple[type[BaseException], ...]) -> int:
+                  startup_errors: tuple[type[BaseException], ...], signals: SigintShutsDown) -> int:
     """``run_node`` once its signal handler is in place: init, build, run or spin, destroy, shut down."""
     try:     # a malformed parameter file: one line naming the file and line, not rcl's traceback
         for path in params_files(sys.argv if args is None else args):
@@ -326,6 +369,7 @@ def _init_and_run(factory: Callable[[], Node], node_name: str, args: list[str] |
         if node is None or not ended_by_signal():
             raise
     finally:
+        signals.returned()
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()

@@ -1,6 +1,6 @@
 """The node helper: parameters carry their ranges, a running node refuses changes it cannot apply, and a
-signal ends a node cleanly even when it lands inside rclpy's own code (Ctrl-C shuts the context down; a second Ctrl-C
-interrupts a stuck callback)."""
+signal ends a node cleanly even when it lands inside rclpy's own code (Ctrl-C shuts the context down), and within a
+second while a callback is stuck (a watchdog; a second Ctrl-C interrupts the callback at once)."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ import signal
 import subprocess
 import sys
 import textwrap
+import time
 from typing import Any
 
 import pytest
@@ -99,37 +100,67 @@ def test_an_rclpy_error_without_a_signal_still_fails_the_node() -> None:
     assert run.returncode != 0 and 'Unable to convert' in run.stderr, run.stderr
 
 
-#: A node whose one callback never returns (a stuck driver call).
+#: A node whose one callback never returns (a stuck driver call), run by ``run_node`` or by smarticle-compose's
+#: host (the same class registered as a composable node).
 _STUCK_NODE = """
 import sys, time
+from types import SimpleNamespace
 from rclpy.node import Node
 from smarticle_common.node import run_node
 
 class Stuck(Node):
-    def __init__(self):
-        super().__init__('stuck')
+    def __init__(self, **options):
+        super().__init__('stuck', **options)
         self.create_timer(0.05, self.tick)
 
     def tick(self):
         print('stuck', flush=True)
         time.sleep(1000.0)
 
+if {composed}:
+    from smarticle_bringup import compose
+    compose.COMPONENTS[('tests', 'stuck')] = '__main__:Stuck'
+    action = SimpleNamespace(package='tests', executable='stuck', ros_arguments=lambda: ['--ros-args'])
+    raise SystemExit(compose.host([action], sys.argv))
 raise SystemExit(run_node(Stuck, 'stuck', sys.argv))
 """
 
 
 @pytest.mark.integration
-def test_ctrl_c_shuts_the_context_down_and_a_second_one_interrupts_a_stuck_callback() -> None:
-    proc = subprocess.Popen([sys.executable, '-c', textwrap.dedent(_STUCK_NODE)], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+@pytest.mark.parametrize('host', ['run_node', 'smarticle-compose'])
+@pytest.mark.parametrize('signum', [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_ends_a_node_within_a_second_even_while_a_callback_is_stuck(signum: int, host: str) -> None:
+    """One Ctrl-C (or SIGTERM) is enough: a watchdog ends the process when the executor has not returned."""
+    proc = subprocess.Popen([sys.executable, '-c', textwrap.dedent(_STUCK_NODE.format(composed=host != 'run_node'))],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout is not None and proc.stdout.readline() == 'stuck\n'
+        sent = time.monotonic()
+        proc.send_signal(signum)
+        code = proc.wait(timeout=10.0)
+        took = time.monotonic() - sent
+        stderr = proc.stderr.read() if proc.stderr else ''
+        assert code == 0 and 'Traceback' not in stderr, stderr
+        assert took < 1.0, f'{took:.2f} s from the signal to the end of the process'
+        busy = [line for line in stderr.splitlines() if 'still busy' in line]
+        assert len(busy) == 1 and signal.Signals(signum).name in busy[0], stderr
+    finally:
+        proc.kill()
+        proc.wait()
+
+
+@pytest.mark.integration
+def test_a_second_ctrl_c_interrupts_a_stuck_callback_at_once() -> None:
+    proc = subprocess.Popen([sys.executable, '-c', textwrap.dedent(_STUCK_NODE.format(composed=False))],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         assert proc.stdout is not None and proc.stdout.readline() == 'stuck\n'
         proc.send_signal(signal.SIGINT)          # the context goes down; the callback is not interrupted
-        with pytest.raises(subprocess.TimeoutExpired):
-            proc.wait(timeout=1.0)
+        time.sleep(0.1)
         proc.send_signal(signal.SIGINT)          # the second press raises KeyboardInterrupt in the callback
         assert proc.wait(timeout=10.0) == 0
-        assert 'Traceback' not in (proc.stderr.read() if proc.stderr else '')
+        stderr = proc.stderr.read() if proc.stderr else ''
+        assert 'Traceback' not in stderr and 'still busy' not in stderr, stderr    # not the watchdog's doing
     finally:
         proc.kill()
         proc.wait()
