@@ -162,11 +162,15 @@ def failure_reason(output: str) -> str | None:
     return None if last is None else _one_line(last)
 
 
-def summary_line(robot: int | None, counts: Mapping[str, object]) -> str:
-    """A node's exit summary for the launcher to gather: ``summary: robot 3: commands 96, halts 2``; without
-    a robot, ``summary: <text>`` (the glider report)."""
-    body = ', '.join(f'{key} {value}' for key, value in counts.items())
-    return f'{SUMMARY}robot {robot}: {body}' if robot is not None else f'{SUMMARY}{body}'
+def summary_line(robot: int, counts: Mapping[str, object]) -> str:
+    """A node's exit summary of one robot, for the launcher to gather: ``summary: robot 3: commands 96, halts 2``
+    (the launcher merges the lines of one robot from every node)."""
+    return f'{SUMMARY}robot {robot}: ' + ', '.join(f'{key} {value}' for key, value in counts.items())
+
+
+def report_line(text: str) -> str:
+    """A node's exit report of the run, for the launcher to print as is (the glider report)."""
+    return f'{SUMMARY}{text}'
 
 
 def gather_summaries(outputs: list[str]) -> tuple[dict[int, dict[str, str]], list[str]]:

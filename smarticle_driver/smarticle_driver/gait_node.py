@@ -16,6 +16,7 @@ from rclpy.time import Time
 from smarticle_common import topics
 from smarticle_common.facts import GAIT_PERIOD, SERVO_SPEED
 from smarticle_common.gait import GaitCommand, GaitConfig, SquareGait, TIME_EPS, board_time
+from smarticle_common.launching import summary_line
 from smarticle_common.node import accept_runtime_changes, read_config, resolve_robot_id, run_node
 from smarticle_common.params import ROBOT_ID_PARAM, ParameterError, ParamSpec
 
@@ -70,6 +71,7 @@ class GaitNode(Node):
         if self.start_at >= 0.0:
             self.gait.start(self.start_at)
         self._last_targets: tuple[float, float] | None = None
+        self.sent = self.halts = 0      # joint commands published, halts taken: the exit summary
         self._last_sent_ns = 0
         self._latest_ns = 0
         self._joint_state_type = topics.message_class('sensor_msgs/msg/JointState')
@@ -147,6 +149,7 @@ class GaitNode(Node):
     def on_halt(self, msg: Any) -> None:
         """Hold the arms now and send the hold command at once."""
         if self.gait.halt(self.gait_clock(self.now_seconds())):
+            self.halts += 1
             self.on_tick()
 
     def on_clock(self, msg: Any) -> None:
@@ -183,6 +186,7 @@ class GaitNode(Node):
         if stamp is None or stamp not in self._decisions:
             return
         if self._decisions[stamp] and self.gait.halt(self.gait_clock(stamp * 1e-9)):
+            self.halts += 1
             self.get_logger().info(f'halt at t = {stamp * 1e-9:.4f} s ({self._decisions[stamp]})')
         for old in [s for s in self._decisions if s < stamp]:
             del self._decisions[old]
@@ -192,6 +196,7 @@ class GaitNode(Node):
         """Lock-step: publish the gait's command for exactly ``now``."""
         t = self.gait_clock(now.nanoseconds * 1e-9)
         self.publisher.publish(self.to_message(self.gait.command(t + TIME_EPS), now))
+        self.sent += 1
 
     def on_tick(self) -> None:
         """Evaluate the gait and publish when the targets change or the heartbeat is due."""
@@ -203,8 +208,14 @@ class GaitNode(Node):
         command = self.gait.command(self.gait_clock(now.nanoseconds * 1e-9) + TIME_EPS)
         if command.targets != self._last_targets or now.nanoseconds - self._last_sent_ns >= self.heartbeat:
             self.publisher.publish(self.to_message(command, now))
+            self.sent += 1
             self._last_targets = command.targets
             self._last_sent_ns = now.nanoseconds
+
+    def destroy_node(self) -> None:
+        """Log the robot's summary line (for the launcher), then destroy the node."""
+        self.get_logger().info(summary_line(self.robot_id, {'commands': self.sent, 'halts': self.halts}))
+        super().destroy_node()
 
     def to_message(self, command: GaitCommand, now: Time) -> Any:
         """Convert a gait command to a JointState (position = targets, velocity = speed limits)."""

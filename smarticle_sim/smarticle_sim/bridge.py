@@ -217,6 +217,11 @@ class SimBridgeCore:
         self._next_frame_ns = 0
         self._fsr_watch: list[int] = []
         self._fsr_reading: FsrReading | None = None   # of the robots in _fsr_watch, while there are any
+        #: Per robot: joint commands applied, and contacts begun (touching another robot at a publication
+        #: after not touching one at the previous): the run's summary.
+        self.commands = np.zeros(self.n_robots, dtype=np.int64)
+        self.contacts = np.zeros(self.n_robots, dtype=np.int64)
+        self._touching: np.ndarray = np.zeros(self.n_robots, dtype=bool)
 
     def _fsr_step(self, _: Runner) -> None:
         self._fsr_reading.step()  # type: ignore[union-attr]   # hooked only while the reading exists
@@ -273,6 +278,7 @@ class SimBridgeCore:
             self.physics.command(robot, (float(self._targets[robot, 0]), float(self._targets[robot, 1])),
                                          speed)
         self.command_stamp_ns[robot] = max(self.command_stamp_ns[robot], stamp_ns)
+        self.commands[robot] += 1
         return checked
 
     def waiting_for(self) -> list[int]:
@@ -280,8 +286,15 @@ class SimBridgeCore:
         return [int(k) for k in np.flatnonzero(self.command_stamp_ns < self.time_ns)]
 
     def advance(self) -> None:
-        """Run one publish period of control ticks (SimTrouble propagates)."""
+        """Run one publish period of control ticks (SimTrouble propagates); count the contacts begun."""
         self.runner.run(self.ticks_per_publish)
+        touching: np.ndarray = np.asarray(self.physics.robot_contacts().any(axis=1), dtype=bool)
+        self.contacts += touching & ~self._touching
+        self._touching = touching
+
+    def summary(self, robot: int) -> dict[str, int]:
+        """What ``robot`` did in this run: joint commands applied, contacts begun with other robots."""
+        return {'commands': int(self.commands[robot]), 'contacts': int(self.contacts[robot])}
 
     def poses(self) -> np.ndarray:
         """(N, 3) published poses: ground truth plus the configured Gaussian noise."""

@@ -22,6 +22,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.time import Time
 from smarticle_common import topics
+from smarticle_common.launching import summary_line
 from smarticle_common.messages import pose_message
 from smarticle_common.node import DiagnosticsPublisher, read_config, run_node
 from smarticle_common.robot_tf import RobotModelPublisher
@@ -248,7 +249,9 @@ class SimBridgeNode(Node):
                                                   **self.robot_model.status()})
 
     def destroy_node(self) -> None:
-        """Release the physics client, then the node."""
+        """Log each robot's summary line (for the launcher), release the physics client, then the node."""
+        for k in range(self.core.n_robots):
+            self.get_logger().info(summary_line(k, self.core.summary(k)))
         self.core.close()
         super().destroy_node()
 

@@ -1,7 +1,8 @@
 """A lock-step controller with faults to order, for the sim_world fixture's tests (run as a script).
 
 It answers every /clock time t with a command stamped t holding the arms straight, except that with
-``stall_at`` >= 0 it stops answering from that sim time on (it stays alive: a node that misses ticks), and
+``stall_at`` >= 0 it stops answering from that sim time on (it stays alive: a node that misses ticks), with
+``exit_at`` >= 0 it exits at that sim time without answering it (a node that has gone), and
 at ``bad_at`` >= 0 it also sends one command with a NaN target, one stamped a second in the future and one
 for robot ``foreign_robot`` (a robot the scene does not have).
 """
@@ -26,6 +27,7 @@ class FaultyController(Node):
         self.robot_id = int(self.declare_parameter('robot_id', 0).value)
         self.stall_at = float(self.declare_parameter('stall_at', -1.0).value)
         self.bad_at = float(self.declare_parameter('bad_at', -1.0).value)
+        self.exit_at = float(self.declare_parameter('exit_at', -1.0).value)
         foreign = int(self.declare_parameter('foreign_robot', 7).value)
         self.JointState = topics.message_class('sensor_msgs/msg/JointState')
         qos = topics.qos_profile(topics.spec_of('joint_commands').qos)
@@ -47,6 +49,9 @@ class FaultyController(Node):
     def on_clock(self, msg: Any) -> None:
         t_ns = Time.from_msg(msg.clock).nanoseconds
         if 0.0 <= self.stall_at <= t_ns * 1e-9:
+            return
+        if 0.0 <= self.exit_at <= t_ns * 1e-9:
+            self.context.try_shutdown()     # the process ends as after Ctrl-C (exit code 0)
             return
         if 0.0 <= self.bad_at <= t_ns * 1e-9 and not self.bad_sent:
             self.bad_sent = True

@@ -227,3 +227,40 @@ def test_the_controller_argument_runs_the_example_controller_in_place_of_the_gai
     assert not list((tmp_path / 'example').glob('gait-*.log'))
     corners = {round(math.degrees(abs(a))) for t in targets for a in t}
     assert len(targets) >= 10 and corners == {60}, corners     # the example's amplitude, every command
+
+
+@pytest.mark.integration
+def test_a_failed_bridge_shows_its_reason_on_the_terminal(tmp_path: Path) -> None:
+    proc = launch(tmp_path, 'triangle', 'scene:=triangle')
+    out = proc.communicate(timeout=120)[0]
+    assert proc.returncode == 2, out
+    lines = [line for line in out.splitlines() if line.startswith('[launch] /sim_stack ended with exit code 2: ')]
+    assert len(lines) == 1 and "sim_bridge.scene must be one of dense, pair, random, got 'triangle'" in lines[0], out
+    assert f'[launch]   its output: {tmp_path / "triangle"}/smarticle-compose-0.log' in out, out
+
+
+@pytest.mark.integration
+def test_a_launch_whose_controllers_have_all_failed_ends_at_once_with_their_reason(tmp_path: Path) -> None:
+    """Not after the bridge's 120 s start timeout: the robots' own nodes have ended, nothing answers for them."""
+    bad = tmp_path / 'bad_amplitude.yaml'
+    bad.write_text('/**:\n  ros__parameters:\n    amplitude_deg: 500.0\n', encoding='utf-8')
+    started = time.monotonic()
+    proc = launch(tmp_path, 'failed', 'robots:=2', 'scene:=pair', 'feedback:=none', f'controller_params:={bad}',
+                  'controller:=smarticle_example_controller/square_stop')
+    out = proc.communicate(timeout=120)[0]
+    assert time.monotonic() - started < 10.0 and proc.returncode != 0, out
+    assert 'amplitude_deg must be in (0, 120]' in out and 'has ended (/smarticle_' in out, out
+    assert 'Traceback' not in out
+
+
+@pytest.mark.integration
+def test_a_launch_ends_with_each_robots_summary_and_the_glider_report(tmp_path: Path) -> None:
+    proc = launch(tmp_path, 'summary', 'robots:=2', 'scene:=pair', 'duration:=2.0', 'composed:=false')
+    out = proc.communicate(timeout=120)[0]
+    assert proc.returncode == 0, out + logs(tmp_path, 'summary')
+    tail = out.splitlines()[-3:]
+    for k in range(2):    # 2 s of sim time, a command per 0.05 s publication: about 41 commands
+        words = tail[k].split()
+        assert words[:3] == ['[launch]', 'robot', f'{k}:'] and 'halts' in words and 'contacts' in words, out
+        assert int(words[words.index('commands') + 1].rstrip(',')) >= 40, out
+    assert tail[2].startswith('[launch] glider report: '), out

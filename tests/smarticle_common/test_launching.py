@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from smarticle_common.launching import failure_reason, gather_summaries, summary_line
+from smarticle_common.launching import failure_reason, gather_summaries, report_line, summary_line
 
 TRACEBACK = '''[INFO] [1.5] [gait]: robot 0: alpha_max 90 deg
 Traceback (most recent call last):
@@ -10,7 +10,9 @@ Traceback (most recent call last):
     sys.exit(main())
   File "/x/smarticle_driver/gait_node.py", line 50, in __init__
     super().__init__(NODE_NAME, **node_options)
-rclpy._rclpy_pybind11.RCLInvalidROSArgsError: Failed to parse ROS arguments: Error parsing near line 3, at /project/src/parse.c:782, at /project/src/rcl/arguments.c:415[ERROR] [1795779194.4] [rcl]: Failed to parse global arguments
+rclpy._rclpy_pybind11.RCLInvalidROSArgsError: Failed to parse ROS arguments: Error parsing near line 3, \
+at /project/src/parse.c:782, at /project/src/rcl/arguments.c:415[ERROR] [1795779194.4] [rcl]: Failed to parse global \
+arguments
 '''
 
 
@@ -34,8 +36,8 @@ def test_summaries_merge_per_robot_and_keep_the_other_reports() -> None:
     bridge = '\n'.join(f'[INFO] [9.0] [sim_bridge]: {summary_line(k, {"commands": 100 + k, "contacts": 3})}'
                        for k in range(2))
     gait = f'[INFO] [9.1] [smarticle_1.gait]: {summary_line(1, {"commands": 99, "halts": 2})}\n'
-    monitor = f'[INFO] [9.2] [glider_monitor]: {summary_line(None, {"gliders": "none"})}\n'
+    monitor = f'[INFO] [9.2] [glider_monitor]: {report_line("gliders: none")}\n'
     robots, others = gather_summaries([bridge, gait + monitor + 'summary: robot 5: not a log line\n'])
     assert robots == {0: {'commands': '100', 'contacts': '3'},
                       1: {'commands': '101', 'contacts': '3', 'halts': '2'}}      # the larger count kept
-    assert others == ['gliders none']
+    assert others == ['gliders: none']

@@ -95,6 +95,20 @@ def test_step_to_raises_sim_stopped_with_that_line(tmp_path: Path) -> None:
         assert world.bridge.returncode == 4
 
 
+def test_the_bridge_stops_soon_once_a_robots_controller_has_exited(tmp_path: Path) -> None:
+    """Not after the 10 s tick timeout: once nobody publishes the robot's commands, in a few seconds."""
+    import time
+
+    with SimWorld(tmp_path) as world:
+        world.start(scene='pair', robots=2, controller=[GAIT, FAULTY], controller_params={'exit_at': 1.0})
+        world.step_to(0.5)
+        started = time.monotonic()
+        with pytest.raises(SimStopped, match=r'lock-step: the node publishing /smarticle_1/joint_commands \(robot 1\) '
+                                             r'has exited at sim time 1\.000 s: stopping'):
+            world.step_to(3.0)
+        assert time.monotonic() - started < 9.0 and world.bridge.returncode == 4
+
+
 def test_bad_commands_are_counted_logged_once_and_the_other_robot_runs_on(sim_world: SimWorld) -> None:
     sim_world.start(scene='pair', robots=2, controller=[GAIT, FAULTY], controller_params={'bad_at': 0.3})
     sim_world.step_to(1.0)

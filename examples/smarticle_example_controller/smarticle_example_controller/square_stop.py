@@ -29,6 +29,7 @@ from rclpy.time import Time
 from smarticle_common import topics
 from smarticle_common.cli import version_of
 from smarticle_common.facts import GAIT_PERIOD, SERVO_SPEED
+from smarticle_common.launching import summary_line
 
 NODE_NAME = 'square_stop'
 
@@ -87,6 +88,7 @@ class SquareStopNode(Node):
         self.create_subscription(topics.message_class(fsr.type), fsr.resolve(self.robot_id), self.on_fsr,
                                  topics.qos_profile(fsr.qos))
         self.stopped_at: tuple[float, float] | None = None   # the corner the gait stopped at
+        self.sent = 0                                        # joint commands published
         self.samples: dict[int, float] = {}                  # FSR stamp (ns) -> largest face force (N)
         self.clock_ns: int | None = None                     # the /clock time still to answer
         if self.lockstep:
@@ -137,6 +139,7 @@ class SquareStopNode(Node):
         msg.position = list(self.stopped_at or targets)
         msg.velocity = [self.speed, self.speed]
         self.commands.publish(msg)
+        self.sent += 1
 
 
 def main(args: list[str] | None = None) -> None:
@@ -157,7 +160,9 @@ def main(args: list[str] | None = None) -> None:
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
-        if node is not None:
+        if node is not None:   # the line smarticle-launch gathers into its summary of the run
+            node.get_logger().info(summary_line(node.robot_id, {'commands': node.sent,
+                                                                'stops': int(node.stopped_at is not None)}))
             node.destroy_node()
         rclpy.try_shutdown()
 
