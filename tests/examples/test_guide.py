@@ -4,8 +4,15 @@ from __future__ import annotations
 
 import re
 import shlex
+import shutil
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
 
+import pytest
 from smarticle_bringup.launch_files import parse_arguments, resolve
+from smarticle_common.launching import executable
 
 from tests.helpers.ros import ROOT
 
@@ -41,3 +48,47 @@ def test_every_argument_of_the_table_is_declared_by_the_launch_files() -> None:
         assert f'<arg name="{name}"' in sim, name
         if name not in ('controller_robots', 'feedback_robots', 'executor'):
             assert f'<arg name="{name}"' in board, name
+
+
+def renamed_and_built(tmp_path: Path, rename: str) -> dict[str, str]:
+    """Run ``rename`` in a workspace holding a copy of the example, colcon-build it; the sourced environment."""
+    src = tmp_path / 'ws' / 'src'
+    src.mkdir(parents=True)
+    shutil.copytree(ROOT / 'examples', src / 'examples', ignore=shutil.ignore_patterns(
+        '__pycache__', '*.egg-info', 'build', 'install', 'log'))
+    subprocess.run(['bash', '-euo', 'pipefail', '-c', rename], cwd=src, check=True, timeout=60)
+    shutil.rmtree(src / 'examples')
+    colcon = Path(sys.executable).parent / 'colcon'
+    result = subprocess.run([str(colcon), 'build', '--event-handlers', 'console_direct-'], cwd=tmp_path / 'ws',
+                            capture_output=True, text=True, timeout=600)
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
+    out = subprocess.run(['bash', '-c', f'source {tmp_path}/ws/install/setup.bash && env -0'],
+                         capture_output=True, check=True, timeout=60).stdout
+    return dict(item.split('=', 1) for item in out.decode().split('\0') if '=' in item)
+
+
+def executable_of(env: dict[str, str], controller: str) -> subprocess.CompletedProcess[str]:
+    """``smarticle-launch board.launch.xml controller:=CONTROLLER --show`` in ``env``: the program it would run."""
+    return subprocess.run([executable('smarticle-launch'), 'smarticle_bringup', 'board.launch.xml',
+                           f'controller:={controller}', 'feedback:=none', '--show'],
+                          env=env, capture_output=True, text=True, timeout=60)
+
+
+@pytest.mark.slow
+def test_the_guides_rename_gives_a_package_colcon_installs_where_the_launcher_finds_it(tmp_path: Path) -> None:
+    """The rename block of section 2, run as written: colcon puts the executable in lib/fold_on_touch and the
+    launcher runs it from there; without setup.cfg's lines it lands elsewhere and the launcher says where it
+    looked instead of running another program of that name (coreutils' fold)."""
+    (rename,) = [textwrap.dedent(b) for b in blocks('bash') if 'sed -i' in b]
+    env = renamed_and_built(tmp_path / 'full', rename)
+    show = executable_of(env, 'fold_on_touch/fold')
+    program = f'{tmp_path}/full/ws/install/fold_on_touch/lib/fold_on_touch/fold'
+    assert show.returncode == 0 and show.stdout.splitlines()[1].split()[0] == program, show.stdout + show.stderr
+    partial = rename.replace("grep -rl smarticle_example_controller . | xargs",
+                             "grep -rl smarticle_example_controller . | grep -v setup.cfg | xargs")
+    env = renamed_and_built(tmp_path / 'partial', partial)
+    show = executable_of(env, 'fold_on_touch/fold')
+    err = show.stderr.strip()
+    assert show.returncode == 2 and '\n' not in err and not show.stdout, show.stdout + err
+    assert f"executable 'fold' of package 'fold_on_touch' not found (looked in {tmp_path}/partial/ws/install/" \
+           'fold_on_touch/lib/fold_on_touch' in err, err
