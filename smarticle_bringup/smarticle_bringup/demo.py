@@ -343,7 +343,7 @@ def run_stack(part: Part, args: argparse.Namespace, folder: Path) -> StackRun:
     bag = folder / 'bag'
     if bag.exists():
         shutil.rmtree(bag)  # the previous demo run's bag
-    listeners = 3 + (1 if args.view else 0)   # the monitor, the recorder, this demo (and the live view)
+    listeners = 2 + (1 if args.view else 0)   # the monitor, this demo (and the view); record:=true adds the recorder
     plan = resolve(package_share('smarticle_bringup') / 'launch' / 'sim.launch.xml', {
         'robots': str(n), 'scene': part.scene_kind, 'seed': str(args.seed), 'duration': repr(float(duration)),
         'feedback': str(part.feedback).lower(), 'composed': str(not args.separate).lower(),
@@ -397,8 +397,8 @@ def run_stack(part: Part, args: argparse.Namespace, folder: Path) -> StackRun:
             raise RuntimeError(f'{driver.node.full_name} exited with code {code}:\n' + launch.output(driver)[-2000:])
         launch.stop()                                  # SIGINT: the recorder closes the bag
         info = read_metadata(bag)
-        print(f'[demo] {part.key}: recorded {info.message_count} messages of {len(info.topics)} topics to {shown(bag)} '
-              f'(smarticle-bag info {shown(bag)})')
+        print(f'[demo] {part.key}: recorded {info.message_count} messages of {len(info.topics)} topics, '
+              f'{info.duration * 1e-9:.1f} s of sim time, to {shown(bag)} (smarticle-bag info {shown(bag)})')
         report_graph(graph, folder / 'nodes.txt')
         report = live.get('gliders')
         pairs = [status.name for status in report.status] if report is not None else []

@@ -56,7 +56,7 @@ def run(mode: str, robots: int, periods: float, log_dir: Path) -> dict[str, Any]
     proc = subprocess.Popen([sys.executable, '-m', 'smarticle_bringup.launcher', 'smarticle_bringup',
                              'sim.launch.xml', f'robots:={robots}', f'duration:={duration!r}',
                              f'composed:={str(mode == "composed").lower()}', 'record:=true', f'bag:={bag}',
-                             'wait_for_subscribers:=3', '--log-dir', str(log_dir)],
+                             'wait_for_subscribers:=2', '--log-dir', str(log_dir)],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     while proc.poll() is None:
         rclpy.spin_once(node, timeout_sec=0.05)

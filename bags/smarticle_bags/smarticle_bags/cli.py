@@ -60,6 +60,9 @@ def _add_record(sub: Any) -> None:
     p.add_argument('--polling-interval', type=float,
                    default=default(RECORDER_PARAMS, 'topic_polling_interval'),
                    help='look for new topics every this many seconds')
+    p.add_argument('--use-sim-time', action='store_true',
+                   help='stamp log time with the sim\'s /clock (a sim run lasts its simulated time in the bag); '
+                        'messages before the first /clock are held until it arrives')
 
 
 def _add_play(sub: Any) -> None:
@@ -149,6 +152,8 @@ def _record(ns: argparse.Namespace, ros_args: list[str] | None) -> int:
         'chunk_size': ns.chunk_size, 'max_bag_size': ns.max_bag_size, 'max_bag_duration': ns.max_bag_duration,
         'flush_interval': ns.flush_interval, 'topic_polling_interval': ns.polling_interval,
     }
+    if ns.use_sim_time:   # otherwise --ros-args -p use_sim_time:=true still decides
+        overrides['use_sim_time'] = True
     return recorder_node.run(overrides, ros_args)
 
 

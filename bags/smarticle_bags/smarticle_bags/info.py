@@ -5,6 +5,7 @@ from __future__ import annotations
 import time
 
 from .reader import BagReader
+from .timebase import describe
 
 
 def human_size(size: int) -> str:
@@ -42,6 +43,7 @@ def format_info(reader: BagReader) -> str:
         f'Start:             {format_time(info.starting_time)}',
         f'End:               {format_time(info.end_time)}',
         f'Messages:          {info.message_count}',
+        f'Log time:          {describe(info)}',
     ]
     topic_lines = [f'Topic: {t.name:<{width_name}} | Type: {t.type:<{width_type}} | '
                    f'Count: {t.message_count} | '

@@ -29,6 +29,7 @@ from . import qos
 from .errors import BagError
 from .playback import PlaybackClock, window
 from .reader import BagReader, RawMessage
+from .timebase import TimeBase, time_base
 from .parameters import PLAYER_NODE, PLAYER_PARAMS, player_config
 
 TICK = 0.001
@@ -107,8 +108,11 @@ class PlayerNode(Node):
         if self.keyboard.active:
             self.create_timer(0.05, self.on_keys)
         self.create_timer(TICK, self.on_tick)
+        base = 'sim time' if time_base(self.reader.info)[0] is TimeBase.SIM else 'wall time'
+        span = (self.last - self.first) / 1e9
         self.get_logger().info(
-            f'playing {self.config.bag}: {len(self.publishers_by_topic)} topics at rate {options.rate:g}'
+            f'playing {self.config.bag}: {len(self.publishers_by_topic)} topics at rate {options.rate:g}, '
+            f'{span:.3f} s of {base} in {span / options.rate:.3f} s'
             + (' (paused: publish false on ~/pause or press space)' if options.start_paused else ''))
 
     def advertise(self, name: str) -> None:
