@@ -57,3 +57,16 @@ def make_bag(folder: Path, count: int = 50, options: WriterOptions | None = None
                 writer.write(topic, data, t)
                 written[topic].append((t, data))
     return written
+
+
+def make_sim_bag(folder: Path, seconds: float, step: float = 0.05) -> int:
+    """Write a bag of poses as a recorder with use_sim_time does (log times from 0, the time base stated);
+    return its message count."""
+    from smarticle_bags.timebase import TimeBase, custom_data
+
+    count = round(seconds / step) + 1
+    with BagWriter(folder, WriterOptions(chunk_size=4000), custom_data=custom_data(TimeBase.SIM)) as writer:
+        writer.add_topic(POSES, 'geometry_msgs/msg/PoseArray')
+        for i in range(count):
+            writer.write(POSES, pose_array(i), round(i * step * 1_000_000_000))
+    return count

@@ -19,6 +19,7 @@ from smarticle_bags import arrays
 from smarticle_bags.reader import BagReader
 from smarticle_bags.timebase import NS, TimeBase, time_base
 
+from tests.helpers.bags import make_sim_bag
 from tests.helpers.ros import NodeProcesses, executable, spin_until
 
 pytestmark = pytest.mark.integration
@@ -83,3 +84,29 @@ def test_record_use_sim_time_holds_messages_until_the_first_clock(
     assert got == [('/smarticles/start', 5 * NS), ('/smarticle_7/joint_states', 5 * NS),
                    ('/smarticle_7/joint_states', 5 * NS + NS // 2), ('/smarticle_7/joint_states', 6 * NS)], got
     assert 'log time: sim time from /clock' in nodes.output(proc)
+
+
+def test_play_of_a_sim_bag_lasts_its_sim_time(nodes: NodeProcesses, ros_node: Callable[[str], Any],
+                                              tmp_path: Path) -> None:
+    """Log times from sim time 0 pace the replay: at rate 1, 2 s of sim take 2 s."""
+    import time
+
+    from geometry_msgs.msg import PoseArray
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from std_msgs.msg import Bool
+
+    count = make_sim_bag(tmp_path / 'sim', 2.0, step=0.1)
+    node = ros_node('sim_play_test')
+    reliable = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
+    arrivals: list[float] = []
+    node.create_subscription(PoseArray, '/smarticles/poses', lambda _msg: arrivals.append(time.monotonic()), reliable)
+    proc = nodes.start('smarticle-bag', 'play', str(tmp_path / 'sim'), '-r', '1', '--start-paused')
+    pause = node.create_publisher(Bool, '/player/pause', reliable)
+    assert spin_until(node, lambda: pause.get_subscription_count() > 0
+                      and node.count_publishers('/smarticles/poses') > 0, 20.0), nodes.output(proc)
+    spin_until(node, lambda: False, 0.5)           # both directions matched before the first message
+    pause.publish(Bool(data=False))
+    assert spin_until(node, lambda: len(arrivals) == count, 20.0), nodes.output(proc)
+    assert proc.wait(timeout=15) == 0
+    assert arrivals[-1] - arrivals[0] == pytest.approx(2.0, abs=0.3)
+    assert '2.000 s of sim time in 2.000 s' in nodes.output(proc)

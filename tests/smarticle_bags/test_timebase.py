@@ -15,7 +15,7 @@ from smarticle_bags.reindex import reindex
 from smarticle_bags.timebase import NS, TIME_BASE_KEY, SimLogClock, TimeBase, custom_data, describe, time_base
 from smarticle_bags.writer import BagWriter, WriterOptions
 
-from tests.helpers.bags import POSES, T0, pose_array
+from tests.helpers.bags import POSES, T0, make_sim_bag, pose_array
 
 
 def test_messages_before_the_first_clock_are_held_then_stamped_with_it() -> None:
@@ -53,18 +53,8 @@ def test_time_base_stated_or_inferred() -> None:
     assert describe(info_of(T0, None)) == 'wall time (assumed: the bag does not say)'
 
 
-def write_sim_bag(folder: Path, seconds: float, step: float = 0.05) -> int:
-    """A bag as the recorder writes it with use_sim_time: log times from 0, the time base stated."""
-    count = round(seconds / step) + 1
-    with BagWriter(folder, WriterOptions(chunk_size=4000), custom_data=custom_data(TimeBase.SIM)) as writer:
-        writer.add_topic(POSES, 'geometry_msgs/msg/PoseArray')
-        for i in range(count):
-            writer.write(POSES, pose_array(i), round(i * step * NS))
-    return count
-
-
 def test_a_sim_bag_says_so_and_lasts_its_sim_time(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    count = write_sim_bag(tmp_path / 'sim', 20.0)
+    count = make_sim_bag(tmp_path / 'sim', 20.0)
     with pytest.raises(SystemExit) as ended:
         cli.main(['info', str(tmp_path / 'sim')])
     out = capsys.readouterr().out
