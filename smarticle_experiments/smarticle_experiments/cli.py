@@ -1,6 +1,6 @@
 """``smarticle-experiments``: list, run, report and check the paper's experiments and studies (no ROS).
 
-    smarticle-experiments list [--all] [-v]
+    smarticle-experiments list [--all] [-v]                      # each spec's trials and run time on 2 cores
     smarticle-experiments run p1 --trials 151                    # embedded LocalCluster, one worker per core
     smarticle-experiments run p1 --scheduler tcp://HOST:8786     # an existing Dask cluster
     smarticle-experiments run my_spec.yaml --periods 5 --seeds 0..2
@@ -13,9 +13,10 @@
     smarticle-experiments physics-study drift --dt 240 480       # the physics study's measurements
 
 Every command that runs trials runs them as trial kinds on the one Dask engine (``--workers``,
-``--scheduler``) into the one store (``--out``). Bad input (unknown spec key, zero or negative count, empty
-grid, a scheduler that does not answer) prints one line naming the cause and exits with code 2, writing
-nothing.
+``--scheduler``) into the one store (``--out``). ``--trials N`` is N trials in all (a multiple of the spec's
+grid points); ``--seeds`` the seeds of every grid point. A shipped spec is found whatever its case. Bad input
+(unknown spec key or name, zero or negative count, empty grid, a scheduler that does not answer) prints one
+line naming the cause (for a name, the closest shipped ones) and exits with code 2, writing nothing.
 """
 
 from __future__ import annotations
@@ -63,12 +64,13 @@ def build_parser() -> argparse.ArgumentParser:
                        ('status', 'count done, failed and missing trials')):
         p = sub.add_parser(name, help=text)
         p.add_argument('spec', nargs='?' if name == 'report' else None,
-                       help='a shipped spec name (see list) or a YAML file')
-        p.add_argument('--trials', type=positive_int, default=None,
-                       help='seeds 0..N-1 per grid point instead of the spec\'s seeds')
+                       help='a shipped spec name (see list; any case) or a YAML file')
+        p.add_argument('--trials', type=positive_int, default=None, metavar='N',
+                       help='N trials in all instead of the spec\'s: seeds 0..N/G-1 at each of its G grid points '
+                            '(N a multiple of G; list shows each spec\'s trials)')
         p.add_argument('--seeds', type=seeds_argument, default=None, metavar='SEEDS',
-                       help='only these seeds (7, 1000..1029 or 1,5,10..12), in the same store; the report is '
-                            'report-<name>-seeds-<ranges>')
+                       help='only these seeds at every grid point (7, 1000..1029 or 1,5,10..12), in the same '
+                            'store; the report is report-<name>-seeds-<ranges>')
         p.add_argument('--periods', type=positive_float, default=None, help='gait periods per trial')
         if name == 'run':
             add_engine_arguments(p)
@@ -93,7 +95,7 @@ def resolve(args: argparse.Namespace) -> ExperimentSpec:
     if args.trials is not None and args.seeds is not None:
         raise SpecError('--trials and --seeds both choose the seeds: give one')
     if args.trials is not None:
-        spec = spec.with_seed_count(args.trials)
+        spec = spec.with_trial_count(args.trials)
     if args.seeds is not None:
         spec = spec.with_seeds(args.seeds)
     if args.periods is not None:
@@ -102,23 +104,29 @@ def resolve(args: argparse.Namespace) -> ExperimentSpec:
 
 
 def _list_line(name: str, width: int, path: str | None = None) -> str:
-    """One spec's line: name, kind, trial count, description (or why it is invalid)."""
+    """One spec's line: name, kind, trial count, run time on 2 cores, description (or why it is invalid)."""
+    from .estimate import duration_text, run_seconds
+
     try:
         with warnings.catch_warnings(record=True) as caught:   # noted on the spec's line, not as a traceback
             warnings.simplefilter('always', NotConvergedWarning)
             spec = load_spec(path or name)
         note = '  (a grid point is coarser than converges: NotConvergedWarning)' if any(
             issubclass(w.category, NotConvergedWarning) for w in caught) else ''
-        return (f'{name:{width}s} {spec.kind:10s} {len(spec.points()) * len(spec.seeds):6d} trials  '
-                f'{spec.description}{note}')
+        return (f'{name:{width}s} {spec.kind:13s} {len(spec.points()) * len(spec.seeds):6d} trials '
+                f'{duration_text(run_seconds(spec)):>9s}  {spec.description}{note}')
     except SpecError as exc:
         return f'{name:{width}s} INVALID: {exc}'
 
 
 def cmd_list(args: argparse.Namespace) -> int:
     """Print the current shipped specs grouped by tag (with --all the superseded and archived ones too)."""
+    from .estimate import REFERENCE_CORES
+
     names = builtin_names()
     width = max(len(name) for name in names)
+    print(f'# name, trial kind, trials, run time on {REFERENCE_CORES} idle cores by the cost model of '
+          f'docs/experiments.md ("Run time estimates"), description')
     specs: dict[str, ExperimentSpec | None] = {}
     for name in names:
         try:
@@ -157,11 +165,30 @@ def cmd_list(args: argparse.Namespace) -> int:
     return 0
 
 
+def run_plan(spec: ExperimentSpec, args: argparse.Namespace) -> str:
+    """What ``run`` is about to do, one line: the spec's trials, how many the store lacks, and how long they take
+    on this run's cores (or on 2 cores for a remote cluster) by the cost model of ``estimate``."""
+    import os
+
+    from .estimate import REFERENCE_CORES, duration_text, run_seconds
+
+    total = len(spec.points()) * len(spec.seeds)
+    done = ResultStore(args.out / spec.store).done(args.retry_failed)
+    todo = total - len({t.key for t in spec.trials(code_version())} & done)
+    cores = REFERENCE_CORES if args.scheduler else (args.workers or os.cpu_count() or 1)
+    where = f'{cores} {"core" if cores == 1 else "cores"}' + (
+        f' (a cluster of N cores: {cores}/N of that)' if args.scheduler else '')
+    return (f'{spec.name}: {total} trials ({len(spec.points())} grid points x {len(spec.seeds)} seeds), '
+            f'{todo} to run: about {duration_text(run_seconds(spec, cores, todo))} on {where} by the cost model '
+            f'of docs/experiments.md')
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     """Run a spec's missing trials and write the summary (and report)."""
     from .report import write_report
 
     spec = resolve(args)
+    print(run_plan(spec, args), flush=True)
     trials, store, code = run_spec(spec, args)
     if args.report:
         print(f'report: {write_report(spec, trials, store, code)}')

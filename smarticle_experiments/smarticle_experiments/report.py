@@ -977,6 +977,16 @@ def margin_lines(ctx: Context) -> list[str]:
             f'trouble is {ph.max_penetration * 1000:g} mm at {ph.penetration_checks} checks in a row).', '']
 
 
+def code_line(code: Mapping[str, str]) -> str:
+    """The report's line on code: the source tree now (HEAD) and, apart, the code version of its trials (the
+    last commit of the trial code, which is in their keys, and the library versions)."""
+    from .store import head_commit
+
+    libraries = ', '.join(f'{name} {version}' for name, version in code.items() if name != 'commit')
+    return (f'Code: the source tree now is at HEAD {head_commit()}; the trials\' code version (in their store keys) is '
+            f'the trial code\'s last commit {code.get("commit", "unknown")}, {libraries}.')
+
+
 def write_report(spec: ExperimentSpec, trials: list[Trial], store: ResultStore, code: Mapping[str, str]) -> Path:
     """Write ``report.md`` and the PNG figures of ``spec`` into ``<store>/report-<name>/``; return the .md path."""
     folder = store.folder / f'report-{spec.name}'
@@ -989,8 +999,8 @@ def write_report(spec: ExperimentSpec, trials: list[Trial], store: ResultStore, 
     ok = ctx.ok()
     head = [f'# {spec.name}: {spec.description}', '',
             f'Spec `{spec.source or spec.name}`, kind `{spec.kind}`, {len(trials)} trials '
-            f'({len(spec.points())} grid points x {len(spec.seeds)} seeds), {spec.base.get("periods", "?")} periods; '
-            f'code {dict(code)}.', '',
+            f'({len(spec.points())} grid points x {len(spec.seeds)} seeds), {spec.base.get("periods", "?")} periods.',
+            '', code_line(code), '',
             '## Paper against sim', '',
             '| quantity | paper | sim [95 % interval] | interval | n trials / values | seeds | paper inside | note |',
             '| --- | --- | --- | --- | ---: | --- | --- | --- |']

@@ -29,6 +29,7 @@ keys are those of a spec written before noise existed.
 
 from __future__ import annotations
 
+import difflib
 import hashlib
 import itertools
 import json
@@ -86,11 +87,17 @@ class ExperimentSpec:
     paper: Mapping[str, Any] = field(default_factory=dict)
     source: str = ''
 
-    def with_seed_count(self, count: int) -> ExperimentSpec:
-        """The same spec with seeds 0..count-1 (``--trials``); SpecError unless count >= 1."""
+    def with_trial_count(self, count: int) -> ExperimentSpec:
+        """The same spec with ``count`` trials in all (``--trials``): seeds 0..count/G-1 at each of its G grid
+        points; SpecError unless count is a whole multiple >= 1 of G, with the counts that are."""
         if isinstance(count, bool) or not isinstance(count, int) or count < 1:
             raise SpecError(f'{self.name}: --trials must be a whole number >= 1, got {count!r}')
-        return _replace(self, seeds=tuple(range(count)))
+        points = len(self.points())
+        if count % points:
+            raise SpecError(f'{self.name}: --trials counts trials in all; its {points} grid points take a multiple '
+                            f'of {points} ({points}, {2 * points}, ...); for K seeds at every grid point give '
+                            f'--seeds 0..K-1')
+        return _replace(self, seeds=tuple(range(count // points)))
 
     def with_seeds(self, seeds: Sequence[int]) -> ExperimentSpec:
         """The same spec over ``seeds`` only (``--seeds``), in the same store, under the name
@@ -374,13 +381,30 @@ def builtin_names() -> list[str]:
     return sorted(p.stem for p in builtin_dir().glob('*.yaml'))
 
 
+def builtin_name(name: str) -> str:
+    """The shipped spec called ``name``, whatever its case (``P7`` is ``p7``); SpecError naming the closest
+    shipped names when there is none."""
+    names = builtin_names()
+    if name in names:
+        return name
+    folded = {n.lower(): n for n in names}
+    if name.lower() in folded:
+        return folded[name.lower()]
+    if name in archive_names():
+        raise SpecError(f'experiment {name!r} is archived: archive/README.md names the commit that runs it')
+    close = [folded[c] for c in difflib.get_close_matches(name.lower(), list(folded), n=3, cutoff=0.5)]
+    hint = f'did you mean {" or ".join(close) if len(close) < 3 else ", ".join(close[:-1]) + " or " + close[-1]}? ' \
+        if close else ''
+    raise SpecError(f'no experiment {name!r}: not a file and not a shipped spec; {hint}'
+                    f'`smarticle-experiments list` shows the {len(names)} shipped specs')
+
+
 def load_spec(name_or_path: str) -> ExperimentSpec:
-    """Load a shipped spec by name (``p1``) or a user's YAML file by path; SpecError if missing or invalid."""
+    """Load a shipped spec by name (``p1``, any case) or a user's YAML file by path; SpecError if missing or
+    invalid."""
     path = Path(name_or_path)
     if not (path.suffix in ('.yaml', '.yml') or path.exists()):
-        path = builtin_dir() / f'{name_or_path}.yaml'
-        if not path.is_file():
-            raise SpecError(f'no experiment {name_or_path!r}: not a file and not one of {", ".join(builtin_names())}')
+        path = builtin_dir() / f'{builtin_name(name_or_path)}.yaml'
     if not path.is_file():
         raise SpecError(f'spec file {path} does not exist')
     try:

@@ -57,6 +57,21 @@ def git_commit() -> str:
     return (commit or 'unknown') + ('+dirty' if dirty else '')
 
 
+@lru_cache(maxsize=1)
+def head_commit() -> str:
+    """The commit of the source tree now (HEAD; '+dirty' if tracked files have local edits), or 'no git' outside
+    a git checkout (an installed package). Not part of a trial's key: that is ``git_commit``, the trial code's."""
+    root = Path(__file__).resolve().parents[2]
+    try:
+        head = subprocess.run(['git', '-C', str(root), 'rev-parse', 'HEAD'], capture_output=True, text=True,
+                              timeout=20, check=True).stdout.strip()
+        dirty = subprocess.run(['git', '-C', str(root), 'status', '--porcelain', '--untracked-files=no'],
+                               capture_output=True, text=True, timeout=20, check=True).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return 'no git'
+    return (head or 'no git') + ('+dirty' if head and dirty else '')
+
+
 def code_version() -> dict[str, str]:
     """The code version a trial key includes: package version, commit, pybullet and numpy versions."""
     return {'smarticle_experiments': __version__, 'commit': git_commit(), **code_versions()}

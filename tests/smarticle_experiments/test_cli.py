@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import socket
 import warnings
 from pathlib import Path
@@ -28,7 +29,8 @@ def free_port() -> int:
 
 
 @pytest.mark.parametrize('case', ['unknown key', 'zero trials', 'negative periods', 'empty grid', 'zero seeds',
-                                  'no such spec', 'dead scheduler', 'bad seeds', 'seeds and trials'])
+                                  'no such spec', 'dead scheduler', 'bad seeds', 'seeds and trials',
+                                  'a spec one off a shipped name', 'an archived spec', 'trials per grid point'])
 def test_bad_input_is_one_line_exit_2_and_writes_nothing(case: str, tmp_path: Path,
                                                          capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / 'out'
@@ -42,6 +44,9 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(case: str, tmp_path: Pa
         'dead scheduler': ['run', spec_file(tmp_path), '--scheduler', f'tcp://127.0.0.1:{free_port()}'],
         'bad seeds': ['run', spec_file(tmp_path), '--seeds', '5..2'],
         'seeds and trials': ['run', spec_file(tmp_path), '--seeds', '0..1', '--trials', '2'],
+        'a spec one off a shipped name': ['run', 'p8'],
+        'an archived spec': ['run', 'p1_fine'],
+        'trials per grid point': ['run', 'p4', '--trials', '24'],   # p4 has 1152 grid points: not 24 seeds of each
     }[case]
     try:
         code = main([*argv, '--out', str(out), '--no-progress'])
@@ -53,7 +58,8 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(case: str, tmp_path: Pa
     cause = {'unknown key': 'colour', 'zero trials': '--trials', 'negative periods': '--periods',
              'empty grid': 'grid.alpha_max_deg', 'zero seeds': 'seeds', 'no such spec': 'p99',
              'dead scheduler': 'does not answer', 'bad seeds': '--seeds',
-             'seeds and trials': '--trials and --seeds'}[case]
+             'seeds and trials': '--trials and --seeds', 'a spec one off a shipped name': 'did you mean p7',
+             'an archived spec': 'archive/README.md', 'trials per grid point': 'multiple of 1152'}[case]
     assert cause in err
     assert not out.exists()
 
@@ -65,6 +71,11 @@ def test_list_names_the_shipped_experiments(capsys: pytest.CaptureFixture[str]) 
     listed = capsys.readouterr().out
     for name in ('p1', 'p4', 'p5', 'p6', 'p7', 'accuracy'):
         assert f'\n{name} ' in '\n' + listed
+    # each spec's trials and its run time on 2 cores: P1's 151 dense trials take hours, P7's seconds
+    p1, p4, p7 = (next(line for line in listed.splitlines() if line.startswith(f'{n} ')) for n in ('p1', 'p4', 'p7'))
+    assert re.search(r' 151 trials +1\.\d h ', p1) and re.search(r' 1152 trials +\d+ min ', p4), (p1, p4)
+    assert re.search(r' 24 trials +\d+ s ', p7), p7
+    assert 'run time on 2 idle cores' in listed.splitlines()[0]
     assert 'NotConvergedWarning' in next(line for line in listed.splitlines() if line.startswith('accuracy '))
 
 
@@ -92,6 +103,31 @@ def test_list_into_a_closed_pipe_ends_quietly_and_version_prints() -> None:
     assert version.returncode == 0 and version.stdout.startswith('smarticle-experiments ')
 
 
+def test_a_shipped_spec_is_found_whatever_its_case(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(['status', 'P7', '--out', str(tmp_path / 'out')]) == 0
+    assert capsys.readouterr().out.startswith('p7: 24 trials: 0 done')
+
+
+def test_trials_counts_trials_in_all(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """``--trials 4`` of a spec of 2 grid points is 4 trials (seeds 0 and 1 at each), not 4 seeds of each."""
+    path = spec_file(tmp_path, grid={'alpha_max_deg': [80, 90]})
+    assert main(['status', path, '--trials', '4', '--out', str(tmp_path / 'out')]) == 0
+    assert capsys.readouterr().out.startswith('tiny: 4 trials: 0 done')
+    assert main(['status', path, '--seeds', '0..3', '--out', str(tmp_path / 'out')]) == 0
+    assert capsys.readouterr().out.startswith('tiny-seeds-0-3: 8 trials: 0 done')
+
+
+def test_run_says_the_trials_and_their_run_time_before_it_starts(tmp_path: Path) -> None:
+    from smarticle_experiments.cli import build_parser, resolve, run_plan
+
+    args = build_parser().parse_args(['run', 'p4', '--workers', '2', '--out', str(tmp_path / 'out')])
+    line = run_plan(resolve(args), args)
+    assert line.startswith('p4: 1152 trials (1152 grid points x 1 seeds), 1152 to run: about '), line
+    assert re.search(r'about \d+ min on 2 cores', line), line
+    args = build_parser().parse_args(['run', 'p1', '--trials', '10', '--workers', '1', '--out', str(tmp_path)])
+    assert re.search(r'p1: 10 trials .* 10 to run: about \d+ min on 1 core ', run_plan(resolve(args), args))
+
+
 def test_report_of_a_spec_never_run_says_so(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(['report', spec_file(tmp_path), '--out', str(tmp_path / 'out')]) == 2
     assert 'run it first' in capsys.readouterr().err
@@ -115,6 +151,20 @@ def test_a_report_over_some_of_the_seeds_sits_beside_the_whole_ones(tmp_path: Pa
     assert '| 90 | 2 | 11.5 [' in part and '11, 12' in part
     assert main(['report', path, '--out', str(tmp_path / 'out')]) == 0
     assert '| 90 | 4 | 11.5 [' in (store.folder / 'report-lone' / 'report.md').read_text()
+
+
+def test_a_report_names_head_and_the_trials_code_version_apart() -> None:
+    """HEAD is the source tree's commit now; the trials' code version is the trial code's last commit (their key)."""
+    import subprocess
+
+    from smarticle_experiments.report import code_line
+
+    root = Path(__file__).resolve().parents[2]
+    head = subprocess.run(['git', '-C', str(root), 'rev-parse', 'HEAD'], capture_output=True, text=True,
+                          check=True).stdout.strip()
+    line = code_line({'smarticle_experiments': '0.1', 'commit': 'abc', 'numpy': '1', 'pybullet': '2'})
+    assert f'HEAD {head}' in line, line
+    assert "the trial code's last commit abc, smarticle_experiments 0.1, numpy 1, pybullet 2." in line, line
 
 
 def test_report_summary_prints_one_line_per_claim_from_the_store(tmp_path: Path,

@@ -95,10 +95,14 @@ def test_bad_specs_are_refused_naming_the_field(change: dict, named: str) -> Non
 def test_trial_overrides_are_checked() -> None:
     spec = spec_from_mapping(TINY)
     with pytest.raises(SpecError, match='trials'):
-        spec.with_seed_count(0)
+        spec.with_trial_count(0)
     with pytest.raises(SpecError, match='periods'):
         spec.with_periods(-1.0)
-    assert len(spec.with_seed_count(5).trials(CODE)) == 5
+    assert len(spec.with_trial_count(5).trials(CODE)) == 5
+    two = spec_from_mapping({**TINY, 'grid': {'alpha_max_deg': [80, 90]}})
+    assert [t.seed for t in two.with_trial_count(4).trials(CODE)] == [0, 1, 0, 1]   # trials in all, not per point
+    with pytest.raises(SpecError, match='multiple of 2'):
+        two.with_trial_count(3)
 
 
 def test_every_grid_point_keeps_its_own_grouped_values() -> None:
