@@ -63,8 +63,7 @@ def component_class(package: str, executable: str) -> Callable[..., Any]:
 
 def plan_nodes(words: Sequence[str]) -> list[Any]:
     """The checked NodeActions of ``[PACKAGE] FILE [name:=value ...]`` (LaunchFileError if any is bad)."""
-    from .launch_files import LaunchFileError
-    from .launcher import plan_from_command_line
+    from .launch_files import LaunchFileError, plan_from_command_line
 
     plan = plan_from_command_line(list(words))
     for node in plan.nodes:

@@ -611,3 +611,14 @@ def find_launch_file(package: str, name: str) -> Path:
     if not path.is_file():
         raise LaunchFileError(f'package {package!r} has no launch file {name!r} (looked in {path.parent})')
     return path
+
+
+def plan_from_command_line(words: list[str]) -> LaunchPlan:
+    """``[PACKAGE] FILE [name:=value ...]`` as a checked plan (LaunchFileError if anything is wrong)."""
+    if not words:
+        raise LaunchFileError('give a launch file, or a package and a launch file name, then name:=value arguments')
+    if words[0].endswith('.xml') or Path(words[0]).is_file() or len(words) == 1 or ':=' in words[1]:
+        path, rest = Path(words[0]), words[1:]
+    else:
+        path, rest = find_launch_file(words[0], words[1]), words[2:]
+    return resolve(path, parse_arguments(rest))

@@ -36,7 +36,7 @@ from types import FrameType
 from smarticle_common import topics
 from smarticle_common.launching import ProcessGroup, failure_reason, gather_summaries
 
-from .launch_files import LaunchFileError, LaunchPlan, NodeAction, find_launch_file, parse_arguments, resolve
+from .launch_files import LaunchFileError, LaunchPlan, NodeAction, plan_from_command_line
 from smarticle_common.cli import add_version, closed_pipe_safe
 
 
@@ -85,17 +85,6 @@ def package_script(package: str, name: str) -> str | None:
     if beside.is_file() and os.access(beside, os.X_OK):
         return str(beside)
     return None
-
-
-def plan_from_command_line(words: list[str]) -> LaunchPlan:
-    """``[PACKAGE] FILE [name:=value ...]`` as a checked plan (LaunchFileError if anything is wrong)."""
-    if not words:
-        raise LaunchFileError('give a launch file, or a package and a launch file name, then name:=value arguments')
-    if words[0].endswith('.xml') or Path(words[0]).is_file() or len(words) == 1 or ':=' in words[1]:
-        path, rest = Path(words[0]), words[1:]
-    else:
-        path, rest = find_launch_file(words[0], words[1]), words[2:]
-    return resolve(path, parse_arguments(rest))
 
 
 @dataclass
