@@ -67,6 +67,9 @@ def test_demo_runs_both_parts_and_equals_the_batch_path(tmp_path: Path) -> None:
 
         recorded = read_poses(BagReader(out / scene.key / 'bag'))   # the bag holds the poses the demo analysed
         assert len(recorded.stamp) >= 0.9 * len(data['time'])
+        # recorded in sim time: the bag lasts the simulated run (start_at 0.5 s + the periods), not its wall time
+        bag_info = BagReader(out / scene.key / 'bag').info
+        assert bag_info.duration * 1e-9 == pytest.approx(0.5 + periods * 1.6, abs=0.1), bag_info.duration
     assert sum(counts) == len(run_batch(FEEDBACK, 1, 2.0, windows=stack_windows()).halts)
     assert (out / 'feedback' / 'halts.png').stat().st_size > 10_000
     from PIL import Image
