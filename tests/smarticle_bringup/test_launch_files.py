@@ -64,6 +64,8 @@ def test_sim_separate_starts_every_robot_and_composed_one_host() -> None:
                            '/smarticle_1/feedback', '/smarticle_2/gait', '/smarticle_2/feedback', '/recorder']
     assert [n.on_exit_shutdown for n in plan.nodes].count(True) == 1 and plan.nodes[0].on_exit_shutdown
     assert params_of(plan.nodes[0])['robots'] == '3'
+    assert params_of(plan.nodes[0])['wait_for_subscribers'] == '2'     # the monitor, and the recorder on top
+    assert params_of(plan.nodes[-1])['use_sim_time'] == 'true'          # the bag's log time in sim time
     assert params_of(plan.nodes[2]) == {'lockstep': 'true', 'wait_for_feedback': 'true', 'use_sim_time': 'true'}
     assert params_of(plan.nodes[3]) == {'lockstep': 'true', 'use_sim_time': 'true'}     # the feedback node
     assert params_of(plan.nodes[-1])['output'] == ''
