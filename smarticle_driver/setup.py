@@ -32,6 +32,7 @@ setup(
             'servo_bridge = smarticle_driver.servo_bridge_node:main',
             'smarticle-fake-board = smarticle_driver.emulator_cli:main',
             'smarticle-board-calibrate = smarticle_driver.calibrate_cli:entry',
+            'smarticle-start = smarticle_driver.start_cli:entry',
         ],
     },
 )

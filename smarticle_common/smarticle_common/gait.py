@@ -249,6 +249,20 @@ class SquareGait:
         return (moved, self._pos0[1]) if arm == 0 else (self._pos0[0], moved)
 
 
+def check_start_time(start: float, now: float, period: float) -> None:
+    """Refuse (GaitError) a gait start more than one ``period`` before ``now``: a clock mix-up, not a start.
+
+    A start a little in the past (a start message on its way, a launch that took a moment) joins the gait
+    where it is; a start long before that is a time on another clock (sim seconds given to a board's wall
+    clock).
+    """
+    if not math.isfinite(start):
+        raise GaitError(f'start time must be finite, got {start!r}')
+    if start < now - period:
+        raise GaitError(f'{start:.3f} s is {now - start:.3f} s before now ({now:.3f} s on this clock), more '
+                        f'than one period ({period:g} s) in the past')
+
+
 def board_time(t: float, start: float | None, rate: float) -> float:
     """Reading at reference time ``t`` of a board clock running ``rate`` times as fast, set at ``start``.
 

@@ -15,12 +15,15 @@ from rclpy.time import Time
 
 from smarticle_common import topics
 from smarticle_common.facts import GAIT_PERIOD, SERVO_SPEED
-from smarticle_common.gait import GaitCommand, GaitConfig, SquareGait, TIME_EPS, board_time
+from smarticle_common.gait import (GaitCommand, GaitConfig, GaitError, SquareGait, TIME_EPS, board_time,
+                                   check_start_time)
 from smarticle_common.launching import summary_line
 from smarticle_common.node import accept_runtime_changes, read_config, resolve_robot_id, run_node
 from smarticle_common.params import ROBOT_ID_PARAM, ParameterError, ParamSpec
 
 NODE_NAME = 'gait'
+#: Latest ``start_at`` (s): wall-clock times up to the year 2286.
+START_AT_MAX = 1e10
 
 PARAMS: tuple[ParamSpec, ...] = (
     ROBOT_ID_PARAM,
@@ -32,10 +35,12 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec('tick_rate', 100.0, 'how often the gait is evaluated, Hz', 1.0, 1000.0),
     ParamSpec('heartbeat', 0.2, 'republish the unchanged command after this many seconds', 0.005, 10.0),
     ParamSpec('autostart', False, 'start at the first tick without waiting for /smarticles/start'),
-    ParamSpec('start_at', -1.0, 'start the gait at this time (s, the node clock or /clock in lock-step) '
-              'without waiting for /smarticles/start; a start message with this stamp changes nothing '
-              '(negative = wait for /smarticles/start). Lock-step runs set it so that the start cannot race '
-              'the first /clock messages', -1.0, 1e7),
+    ParamSpec('start_at', -1.0, "start the gait at this time (s) on the node's clock without waiting for "
+              '/smarticles/start: on a board the wall clock in seconds since 1970 (e.g. $(date +%s) + 5), with '
+              'use_sim_time the sim time, in lock-step the /clock time; a start more than one period in the past '
+              'is refused; a start message with this stamp changes nothing (negative = wait for '
+              '/smarticles/start). Lock-step runs set it so that the start cannot race the first /clock messages',
+              -1.0, START_AT_MAX),
     ParamSpec('clock_rate_offset', 0.0, "relative error of this gait's clock rate: the gait sees t0 + (t - t0) * "
               '(1 + offset) from its start t0. 0 on a real board (its own clock drifts); in the simulation '
               "a seeded draw models the board's resonator (docs/sim_core.md, \"Noise with a cause\")",
@@ -68,7 +73,9 @@ class GaitNode(Node):
         self.heartbeat = Time(seconds=values['heartbeat']).nanoseconds
         self.autostart: bool = values['autostart']
         self.start_at: float = values['start_at']
+        self.lockstep: bool = values['lockstep']
         if self.start_at >= 0.0:
+            self.check_start_at(config.period)
             self.gait.start(self.start_at)
         self._last_targets: tuple[float, float] | None = None
         self.sent = self.halts = 0      # joint commands published, halts taken: the exit summary
@@ -81,7 +88,6 @@ class GaitNode(Node):
         header_type = topics.message_class('std_msgs/msg/Header')
         start = topics.spec_of('start')
         self.create_subscription(header_type, start.resolve(), self.on_start, topics.qos_profile(start.qos))
-        self.lockstep: bool = values['lockstep']
         self.wait_for_feedback: bool = self.lockstep and values['wait_for_feedback']
         if values['wait_for_feedback'] and not self.lockstep:
             self.get_logger().warning('wait_for_feedback needs lockstep:=true: ignored')
@@ -104,11 +110,27 @@ class GaitNode(Node):
         else:
             self.timer = self.create_timer(1.0 / values['tick_rate'], self.on_tick)
         accept_runtime_changes(self, PARAMS, self.on_parameters)
-        waiting = ('starting at once' if self.autostart else f'starting at t = {self.start_at:g} s'
-                   if self.start_at >= 0.0 else f'waiting for {start.resolve()}')
+        waiting = ('starting at once' if self.autostart else f'starting at t = {self.start_at:.3f} s'
+                   if self.start_at >= 0.0 else f'waiting for {start.resolve()} (smarticle-start sends it)')
         self.get_logger().info(
             f'robot {self.robot_id}: alpha_max {values["alpha_max_deg"]:g} deg, '
             f'period {values["period"]:g} s, phase {values["phase"]:g}; {waiting}')
+
+    def check_start_at(self, period: float) -> None:
+        """Refuse a ``start_at`` more than one period before the node's clock (ParameterError, one line).
+
+        In lock-step the gait's clock is /clock, unknown at start-up, and with use_sim_time before the first
+        /clock message the node's clock reads zero: the check needs a clock and is skipped without one.
+        """
+        now = self.get_clock().now().nanoseconds * 1e-9
+        if self.lockstep or now <= 0.0:
+            return
+        try:
+            check_start_time(self.start_at, now, period)
+        except GaitError as err:
+            raise ParameterError(f'node {self.get_name()} parameter start_at: {err}; give a wall-clock time '
+                                 '(seconds since 1970, e.g. $(date +%s) + 5) or -1 to wait for '
+                                 f'{topics.spec_of("start").resolve()}') from None
 
     def on_parameters(self, changes: dict[str, Any]) -> None:
         """Apply a run-time change: the new amplitude from the next gait period on (GaitError if unusable)."""
@@ -142,7 +164,11 @@ class GaitNode(Node):
         stamp = msg.stamp.sec + msg.stamp.nanosec * 1e-9
         if self.start_at >= 0.0 and abs(stamp - self.start_at) < 1e-9:
             return  # the start this node was given already (a restart would forget a halt)
-        self.gait.start(stamp if stamp > 0.0 else self.now_seconds())
+        now = self.now_seconds()
+        if 0.0 < stamp < now - self.gait.config.period:
+            self.get_logger().warning(f'the start stamp {stamp:.3f} s is {now - stamp:.3f} s before now on this '
+                                      "node's clock: the gait joins that start mid-run")
+        self.gait.start(stamp if stamp > 0.0 else now)
         self.get_logger().info(f'gait start at t = {self.gait.start_time:.3f} s')
         self.on_tick()
 

@@ -70,10 +70,13 @@ PARAMS: tuple[ParamSpec, ...] = (
               'velocity', 0.01, 100.0),
     ParamSpec('max_speed', SERVO_SPEED, "the servo's top speed (rad/s): higher speed limits are clamped to it",
               0.01, 100.0),
+    ParamSpec('calibration_dir', '', f'folder of this robot\'s calibration, as smarticle-board-calibrate --out '
+              f'writes it: {SERVO_CALIBRATION_FILE} and {FSR_CALIBRATION_FILE} are read from it (a part it lacks '
+              "comes from the package's config folder); empty = the package's config folder"),
     ParamSpec('servo_calibration_file', '', f'servo calibration YAML; empty = {SERVO_CALIBRATION_FILE} in '
-              "the package's config folder"),
-    ParamSpec('fsr_calibration_file', '', f'FSR calibration YAML; empty = {FSR_CALIBRATION_FILE} in the '
-              "package's config folder"),
+              "calibration_dir, else in the package's config folder"),
+    ParamSpec('fsr_calibration_file', '', f'FSR calibration YAML; empty = {FSR_CALIBRATION_FILE} in '
+              "calibration_dir, else in the package's config folder"),
     ParamSpec('reply_timeout', 0.02, 'seconds to wait for a board reply before counting it short',
               0.001, 1.0),
     ParamSpec('reconnect_initial', 0.1, 'first wait (s) before reopening a vanished port; doubles per failed '
@@ -107,6 +110,7 @@ class BridgeConfig:
     max_speed: float = SERVO_SPEED
     servo_calibration_file: str = ''
     fsr_calibration_file: str = ''
+    calibration_dir: str = ''
     reply_timeout: float = 0.02
     reconnect_initial: float = 0.1
     reconnect_max: float = 2.0
@@ -129,6 +133,14 @@ class BridgeConfig:
         if self.default_speed > self.max_speed:
             raise BridgeConfigError(f'default_speed ({self.default_speed} rad/s) must not exceed max_speed '
                                     f'({self.max_speed} rad/s)')
+        if self.calibration_dir:
+            folder = Path(self.calibration_dir).absolute()
+            if not folder.is_dir():
+                raise BridgeConfigError(f'calibration_dir {folder} is not a folder (smarticle-board-calibrate '
+                                        '--out FOLDER writes one)')
+            if not any((folder / name).is_file() for name in (SERVO_CALIBRATION_FILE, FSR_CALIBRATION_FILE)):
+                raise BridgeConfigError(f'calibration_dir {folder} has neither {SERVO_CALIBRATION_FILE} nor '
+                                        f'{FSR_CALIBRATION_FILE} (smarticle-board-calibrate --out FOLDER writes them)')
 
     @classmethod
     def from_values(cls, values: dict[str, Any]) -> BridgeConfig:
@@ -140,18 +152,26 @@ class BridgeConfig:
                    fsr_rate_hz=values['fsr_rate_hz'], watchdog_timeout=values['watchdog_timeout'],
                    default_speed=values['default_speed'], max_speed=values['max_speed'],
                    servo_calibration_file=values['servo_calibration_file'],
-                   fsr_calibration_file=values['fsr_calibration_file'], reply_timeout=values['reply_timeout'],
+                   fsr_calibration_file=values['fsr_calibration_file'],
+                   calibration_dir=values['calibration_dir'], reply_timeout=values['reply_timeout'],
                    reconnect_initial=values['reconnect_initial'], reconnect_max=values['reconnect_max'],
                    diagnostics_period=values['diagnostics_period'],
                    one_arm_at_a_time=values['one_arm_at_a_time'], autostart=values['autostart'])
 
     def servo_calibration_path(self) -> Path:
-        """Return the servo calibration file to load (the package default when none is set)."""
-        return Path(self.servo_calibration_file or default_config_dir() / SERVO_CALIBRATION_FILE)
+        """Return the servo calibration file to load: the file set, else calibration_dir's, else the package's."""
+        return self._calibration_path(self.servo_calibration_file, SERVO_CALIBRATION_FILE)
 
     def fsr_calibration_path(self) -> Path:
-        """Return the FSR calibration file to load (the package default when none is set)."""
-        return Path(self.fsr_calibration_file or default_config_dir() / FSR_CALIBRATION_FILE)
+        """Return the FSR calibration file to load: the file set, else calibration_dir's, else the package's."""
+        return self._calibration_path(self.fsr_calibration_file, FSR_CALIBRATION_FILE)
+
+    def _calibration_path(self, given: str, name: str) -> Path:
+        if given:
+            return Path(given)
+        if self.calibration_dir and (Path(self.calibration_dir) / name).is_file():
+            return (Path(self.calibration_dir) / name).absolute()
+        return default_config_dir() / name
 
 
 @dataclass

@@ -61,8 +61,8 @@ PARAMS: tuple[ParamSpec, ...] = (
               'clock_rate_offset, so that both read gait periods on the same clock (0 on a real board)',
               -0.05, 0.05),
     ParamSpec('diagnostics_period', 1.0, 'seconds (wall) between /diagnostics messages', 0.05, 60.0),
-    ParamSpec('start_at', -1.0, "the gait's start time (s): use the gait node's start_at; negative = take "
-              'it from /smarticles/start', -1.0, 1e7),
+    ParamSpec('start_at', -1.0, "the gait's start time (s): use the gait node's start_at (on a board seconds "
+              'since 1970); negative = take it from /smarticles/start', -1.0, 1e10),
     ParamSpec('lockstep', False, "the simulation's lock-step mode: publish the decision on every FSR sample "
               '(/smarticle_<k>/feedback_decision) for a gait node with wait_for_feedback:=true, and take a '
               'repeated sample (same stamp) only once'),

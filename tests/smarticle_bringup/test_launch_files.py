@@ -49,7 +49,10 @@ def test_board_puts_one_robot_in_its_namespace() -> None:
     plan = resolve(LAUNCH / 'board.launch.xml', {'robot': '3', 'port': '/dev/ttyUSB1'})
     assert names(plan) == ['/smarticle_3/servo_bridge', '/smarticle_3/gait', '/smarticle_3/feedback']
     bridge, gait, _ = plan.nodes
-    assert params_of(bridge) == {'port': '/dev/ttyUSB1', 'autostart': 'true'}
+    assert params_of(bridge) == {'port': '/dev/ttyUSB1', 'calibration_dir': str(ROOT / 'smarticle_driver' / 'config'),
+                                 'autostart': 'true'}
+    calibrated = resolve(LAUNCH / 'board.launch.xml', {'calibration': 'robot3/'})   # smarticle-board-calibrate's --out
+    assert params_of(calibrated.nodes[0])['calibration_dir'] == 'robot3/'
     assert params_of(gait) == {'start_at': '-1.0'}
     args = gait.ros_arguments()
     assert args[:5] == ['--ros-args', '-r', '__node:=gait', '-r', '__ns:=/smarticle_3']

@@ -146,3 +146,41 @@ def test_alpha_max_changes_at_run_time_and_bad_changes_are_refused(nodes, ros_no
     amplitudes = [round(math.degrees(max(abs(v) for v in pos)), 6) for pos in got[count:]]
     assert amplitudes[0] == 60.0 and amplitudes[-10:] == [30.0] * 10     # the old square until its period ends
     assert sorted(set(amplitudes)) == [30.0, 60.0] and amplitudes == sorted(amplitudes, reverse=True)
+
+
+def test_a_start_at_on_another_clock_is_refused_in_one_line_at_once() -> None:
+    """start_at:=0.0 on a board's wall clock is 1970: refused with one line, not a spin through 56 years of
+    quarter periods deaf to signals."""
+    began = time.monotonic()
+    proc = subprocess.run([executable('gait'), '--ros-args', '-p', 'start_at:=0.0'],
+                          capture_output=True, text=True, timeout=30)
+    took = time.monotonic() - began
+    lines = [line for line in (proc.stdout + proc.stderr).splitlines() if line.strip()]
+    assert proc.returncode == 2 and len(lines) == 1, lines
+    assert 'start_at' in lines[0] and 'more than one period (1.6 s) in the past' in lines[0], lines[0]
+    assert took < 5.0, f'{took:.1f} s'     # about 0.5 s: the import of rclpy and one clock reading
+
+
+@pytest.mark.integration
+def test_a_wall_clock_start_at_starts_the_gait_there(nodes, ros_node) -> None:  # type: ignore[no-untyped-def]
+    """start_at in seconds since 1970 (board.launch.xml's start_at:=...): the gait starts at that instant."""
+    from sensor_msgs.msg import JointState
+
+    t0 = round(time.time() + 4.0, 3)
+    proc = nodes.start('gait', '--ros-args', '-p', 'robot_id:=6', '-p', 'alpha_max_deg:=60.0', '-p', 'period:=0.8',
+                       '-p', 'servo_speed:=10.5', '-p', 'heartbeat:=0.05', '-p', f'start_at:={t0}')
+    node = ros_node('gait_start_at_probe')
+    got: list[tuple[float, tuple[float, ...]]] = []
+    node.create_subscription(JointState, topics.topic('joint_commands', 6),
+                             lambda m: got.append((m.header.stamp.sec + m.header.stamp.nanosec * 1e-9,
+                                                   tuple(m.position))),
+                             topics.qos_profile(topics.Qos.COMMAND))
+    assert spin_until(node, lambda: bool(got) and got[-1][0] > t0 + 1.7, 15.0), nodes.output(proc)
+    reference = SquareGait(GaitConfig.from_degrees(60.0, period=0.8, servo_speed=10.5))
+    reference.start(t0)
+    a = math.radians(60.0)
+    assert all(pos == pytest.approx((a, a)) for t, pos in got if t < t0)           # the start pose until t0
+    started = [(t, pos) for t, pos in got if t >= t0]
+    assert len(started) > 20
+    assert all(pos == pytest.approx(reference.command(t).targets, abs=1e-9) for t, pos in started)
+    assert f'starting at t = {t0:.3f} s' in nodes.output(proc)

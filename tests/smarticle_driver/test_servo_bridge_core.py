@@ -148,6 +148,25 @@ def test_contradictory_settings_are_refused(kwargs: dict[str, object], text: str
         BridgeConfig(**{'port': '/dev/null', **kwargs})  # type: ignore[arg-type]
 
 
+def test_the_calibration_folder_of_smarticle_board_calibrate_is_read(tmp_path: Path) -> None:
+    """calibration_dir (board.launch.xml's calibration:=robot0/): its files, the package's for a part it lacks."""
+    shipped = ROOT / 'smarticle_driver' / 'config'
+    robot = tmp_path / 'robot0'
+    robot.mkdir()
+    (robot / 'servo_calibration.yaml').write_text((shipped / 'servo_calibration.yaml').read_text())
+    config = BridgeConfig(port='/dev/null', calibration_dir=str(robot))
+    assert config.servo_calibration_path() == robot / 'servo_calibration.yaml'
+    assert config.fsr_calibration_path() == shipped / 'fsr_calibration.yaml'     # --skip fsrs: the package's
+    (robot / 'fsr_calibration.yaml').write_text((shipped / 'fsr_calibration.yaml').read_text())
+    assert config.fsr_calibration_path() == robot / 'fsr_calibration.yaml'
+    own = BridgeConfig(port='/dev/null', calibration_dir=str(robot), servo_calibration_file='mine.yaml')
+    assert own.servo_calibration_path() == Path('mine.yaml')                       # a file set by name wins
+    with pytest.raises(BridgeConfigError, match='is not a folder'):
+        BridgeConfig(port='/dev/null', calibration_dir=str(tmp_path / 'robot9'))
+    with pytest.raises(BridgeConfigError, match='has neither servo_calibration.yaml nor fsr_calibration.yaml'):
+        BridgeConfig(port='/dev/null', calibration_dir=str(tmp_path))
+
+
 # -- with the emulated board -------------------------------------------------------------------------
 
 def test_commands_reach_the_board_and_joint_states_follow_the_slew_model(core: ServoBridgeCore,
