@@ -21,6 +21,7 @@ from geometry_msgs.msg import Point
 from rclpy.node import Node
 from rclpy.time import Time
 from smarticle_common import topics
+from smarticle_common.launching import report_line
 from smarticle_common.messages import planar_poses
 from smarticle_common.node import OK, DiagnosticsPublisher, read_config, run_node
 from smarticle_common.params import ParameterError
@@ -153,6 +154,14 @@ class GliderMonitorNode(Node):
     def publish_diagnostics(self) -> None:
         """Publish the node's status and counters on /diagnostics."""
         self.diagnostics.publish(OK, f'{len(self.bound)} bound pair(s)', self.counts)
+
+    def destroy_node(self) -> None:
+        """Log the run's glider report (one line, for the launcher), then destroy the node."""
+        w = self.settings.glider.body_length
+        pairs = '; '.join(f'{p.i}-{p.j} {p.glider_class.value}, bound {p.age_periods} periods, travel '
+                          f'{p.distance / w:.2f} W' for p in self.monitor.finish())
+        self.get_logger().info(report_line(f'glider report: {pairs or "no bound pair"}'))
+        super().destroy_node()
 
 
 def main(args: list[str] | None = None) -> None:
