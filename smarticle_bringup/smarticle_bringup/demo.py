@@ -34,7 +34,7 @@ from smarticle_common.cli import SeedSyntaxError, add_version, parse_seeds
 from smarticle_common.facts import GAIT_PERIOD, PRESETS, RobotSpec
 from smarticle_common.runs import Recording, save_npz
 
-from .demo_scenes import FEEDBACK, GLIDERS, MIN_PERIODS, TRAVEL_MIN_W, DemoScene, travelling
+from .demo_scenes import FEEDBACK, GLIDERS, MIN_PERIODS, TRAVEL_MIN_W_PER_100, DemoScene, travelling
 
 #: Where the demo's choice and its evidence are written up (relative to the repository root).
 DEMO_DOC = 'docs/demo.md'
@@ -266,7 +266,8 @@ def write_params(part: Part, args: argparse.Namespace, path: Path) -> dict[str, 
     data: dict[str, Any] = {'/**': {'ros__parameters': shared},
                             '/sim_bridge': {'ros__parameters': dict(part.bridge)},
                             '/glider_monitor': {'ros__parameters': {'min_periods': MIN_PERIODS, 'body_length': bl,
-                                                                    'r_bind': R_BIND_BL * bl}},
+                                                                    'r_bind': R_BIND_BL * bl,
+                                                                    'travel_min_w_per_100': TRAVEL_MIN_W_PER_100}},
                             '/view': {'ros__parameters': {'preset': part.spec.name}}}
     for k, own in enumerate(part.own):
         data[f'/smarticle_{k}/gait'] = {'ros__parameters': dict(own, servo_speed=float(part.spec.servo_speed))}
@@ -401,8 +402,8 @@ def run_stack(part: Part, args: argparse.Namespace, folder: Path) -> StackRun:
               f'{info.duration * 1e-9:.1f} s of sim time, to {shown(bag)} (smarticle-bag info {shown(bag)})')
         report_graph(graph, folder / 'nodes.txt')
         report = live.get('gliders')
-        pairs = [status.name for status in report.status] if report is not None else []
-        print(f'[demo] {part.key}: live glider monitor, last report: {len(pairs)} bound pair(s)'
+        pairs = [f'{s.name} ({s.message})' for s in report.status] if report is not None else []
+        print(f'[demo] {part.key}: live glider monitor, last report: {len(pairs)} pair(s) bound now'
               + (': ' + ', '.join(pairs) if pairs else ''))
     finally:
         launch.stop()
@@ -425,15 +426,16 @@ def run_stack(part: Part, args: argparse.Namespace, folder: Path) -> StackRun:
 
 
 def glider_lines(gliders: Any, width: float) -> str:
-    """The glider table the demo prints: pair, class, lifetime, travel in W, whether it travels."""
+    """The table of bound pairs the demo prints: pair, what it is (class and kind), mean phi, lifetime, travel in W
+    and per 100 periods, whether it travels (a glider)."""
     if not gliders:
         return '  none'
-    rows = [('pair', 'class', 'from period', 'lifetime [periods]', 'bound at the end', 'r [BL]', 'travel [W]',
-             f'travels (>= {TRAVEL_MIN_W:g} W)')]
+    rows = [('pair', 'what', 'mean phi [deg]', 'from period', 'lifetime [periods]', 'bound at the end', 'r [BL]',
+             'travel [W]', 'W per 100 periods', f'travels (>= {TRAVEL_MIN_W_PER_100:g} W per 100 periods)')]
     for g in gliders:
-        rows.append((f'{g.i}-{g.j}', g.glider_class.value, str(g.start_period), str(g.lifetime_periods),
-                     'yes' if g.ongoing else 'no', f'{g.r_mean / width:.2f}', f'{g.distance / width:.2f}',
-                     'yes' if travelling(g, width) else 'no'))
+        rows.append((f'{g.i}-{g.j}', g.label, f'{math.degrees(g.phi_mean):.0f}', str(g.start_period),
+                     str(g.lifetime_periods), 'yes' if g.ongoing else 'no', f'{g.r_mean / width:.2f}',
+                     f'{g.distance / width:.2f}', f'{g.travel_w_per_100:.1f}', 'yes' if travelling(g) else 'no'))
     widths = [max(len(r[c]) for r in rows) for c in range(len(rows[0]))]
     return '\n'.join('  ' + '  '.join(cell.rjust(w) for cell, w in zip(r, widths, strict=True)) for r in rows)
 
@@ -459,9 +461,8 @@ def report_part(part: Part, run: StackRun, out: Path) -> tuple[Any, list[str]]:
           f'DDS, {run.rtf:.1f}x real time ({run.wall:.0f} s)')
     if run.trouble:
         print(f'[demo]   THE SIMULATION STOPPED EARLY: {run.trouble}; the analysis covers the run up to then')
-    print(f'[demo]   gliders (a pair bound >= {MIN_PERIODS} periods: centre distance under '
-          f'{config.r_bind / width:.1f} BL in some frame of each period; travel = net displacement of its centre '
-          f'in W = BL = {width * 100:.1f} cm):')
+    print(f'[demo]   {report.summary}:\n[demo]   ({report.rule}; travel = net displacement of its centre '
+          f'in W = BL = {width * 100:.1f} cm)')
     print(glider_lines(report.analysis.gliders, width))
     written = [plot_trajectories(run.times, run.poses, width, out / 'trajectories.png', part.key)]
     if report.figure is not None:
@@ -481,6 +482,8 @@ def main(argv: list[str] | None = None, prog: str = 'smarticle-demo') -> int:
 
     matplotlib.use('Agg')
     from smarticle_sim.errors import SceneError
+
+    from smarticle_tracking.gliders import running_labels
 
     from .demo_figures import AnimatedPart, GliderSpan, write_animation
 
@@ -510,8 +513,8 @@ def main(argv: list[str] | None = None, prog: str = 'smarticle-demo') -> int:
         analysis, written = report_part(part, run, folder)
         files += written
         width = part.spec.body_length
-        spans = [GliderSpan(g.i, g.j, g.glider_class.value, g.start_time, g.end_time, g.distance / width)
-                 for g in analysis.gliders]
+        spans = [GliderSpan(g.i, g.j, g.glider_class.value, g.start_time, g.end_time, g.distance / width,
+                            running_labels(analysis, g)) for g in analysis.gliders]
         animated.append(AnimatedPart(f'part {index + 1} ({part.key}): {part.start}', part.spec, run.times,
                                      run.poses, run.arms, spans, run.halts, [o['phase'] for o in part.own]))
     if args.animation and animated:

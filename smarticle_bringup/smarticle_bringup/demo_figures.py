@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 from smarticle_common.facts import GAIT_PERIOD, R_BIND_BL, RobotSpec
 from smarticle_common.pairs import pair_coordinates
+from smarticle_tracking.gliders import MIN_PERIODS
 
 #: Colours: a robot not in a glider, a halted robot's outline, the glider classes (as the live view's).
 ROBOT_FILL = '#b8b8c0'
@@ -39,7 +40,9 @@ def robot_outlines(spec: RobotSpec, pose: Sequence[float], arms: Sequence[float]
 
 @dataclass(frozen=True)
 class GliderSpan:
-    """A glider to highlight: its robots, class, the sim times it was bound and its travel (W)."""
+    """A bound pair to highlight: its robots, class, the sim times it was bound, its travel (W) and what the run
+    so far is after each of its periods (``smarticle_tracking.gliders.running_labels``: 'bound', then e.g.
+    'C1 bound pair', 'C1 glider'); without labels, 'bound' and then '<class> bound pair' from its K-th period."""
 
     i: int
     j: int
@@ -47,6 +50,17 @@ class GliderSpan:
     start: float     # s after the gait start
     end: float       # s after the gait start
     travel_w: float
+    labels: Sequence[str] = ()
+
+    def label_at(self, t: float) -> str | None:
+        """The words for the pair at ``t`` (s): those of its completed bound periods; None before the first
+        one ends or outside the run. A label appears only once its definition is met."""
+        done = math.floor((t - self.start) / GAIT_PERIOD + 1e-9)
+        if not self.start <= t < self.end or done < 1:
+            return None
+        if self.labels:
+            return self.labels[min(done, len(self.labels)) - 1]
+        return f'{self.glider_class} bound pair' if done >= MIN_PERIODS else 'bound'
 
 
 @dataclass(frozen=True)
@@ -97,10 +111,11 @@ def scale_label(spec: RobotSpec) -> str:
 
 def write_animation(parts: Sequence[AnimatedPart], path: Path, step: float = 0.2, fps: int = 20,
                     size_px: int = 420) -> Path:
-    """Write a GIF of ``parts`` one after the other: robots as three links, gliders in their class colour with
-    a bond between the two, each robot's path once per period, a robot outlined in red while it holds after a
-    halt, the time, the gait period and the halts so far. Every part is drawn at one scale, with a scale bar
-    of ``SCALE_BAR`` metres labelled in centimetres and the part's W (its preset's body width)."""
+    """Write a GIF of ``parts`` one after the other: robots as three links, bound pairs with a bond between the
+    two, in their class colour and labelled ('C1 bound pair', 'C1 glider') only once the run so far meets that,
+    each robot's path once per period, a robot outlined in red while it holds after a halt, the time, the gait
+    period and the halts so far. Every part is drawn at one scale, with a scale bar of ``SCALE_BAR`` metres
+    labelled in centimetres and the part's W (its preset's body width)."""
     import matplotlib
 
     matplotlib.use('Agg')
@@ -152,10 +167,11 @@ def write_animation(parts: Sequence[AnimatedPart], path: Path, step: float = 0.2
             for index in frame_indices(part.times, step):
                 t = float(part.times[index])
                 path_idx = [*strobe[strobe <= index], index]
-                live = [g for g in part.gliders if g.start <= t < g.end]
+                live = [(g, label) for g in part.gliders if (label := g.label_at(t)) is not None]
                 colour = {}
-                for g in live:
-                    colour[g.i] = colour[g.j] = CLASS_FILL.get(g.glider_class, CLASS_FILL['unclassified'])
+                for g, label in live:   # the class colour once the pair is a bound pair (its label names the class)
+                    if label != 'bound':
+                        colour[g.i] = colour[g.j] = CLASS_FILL.get(label.split()[0], CLASS_FILL['unclassified'])
                 halted = part.held(t)
                 for k in range(n):
                     pose = part.poses[index, k]
@@ -170,14 +186,13 @@ def write_animation(parts: Sequence[AnimatedPart], path: Path, step: float = 0.2
                     trails[k].set_data(xy[path_idx, k, 0], xy[path_idx, k, 1])
                     names[k].set_position((pose[0], pose[1]) if seen else (np.nan, np.nan))
                 if live:
-                    g = live[0]
+                    g = live[0][0]
                     bond.set_data(part.poses[index, [g.i, g.j], 0], part.poses[index, [g.i, g.j], 1])
                 else:
                     bond.set_data([], [])
                 done = [(s, k) for s, k, _ in part.halts if s <= t]
                 lines = [f't = {t:5.1f} s   period {t / GAIT_PERIOD:4.1f}']
-                lines += [f'{g.glider_class} glider {g.i}-{g.j}: bound {(min(t, g.end) - g.start) / GAIT_PERIOD:4.1f} '
-                          'periods' for g in live]
+                lines += [f'{g.i}-{g.j} {label}: bound {(t - g.start) / GAIT_PERIOD:4.1f} periods' for g, label in live]
                 if part.halts or 'feedback' in part.label:
                     per = [sum(1 for _, r in done if r == k) for k in range(n)]
                     lines.append('halts: ' + ', '.join(f'{k}: {c}' for k, c in enumerate(per))

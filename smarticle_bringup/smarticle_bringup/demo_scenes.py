@@ -3,7 +3,7 @@
 Pure (no rclpy). ``smarticle_bringup.demo`` runs a scene through the lock-step ROS stack with the node
 parameters ``node_params`` gives; ``tests/benchmarks/demo_seeds.py`` runs the same scene through the batch
 core (``run_batch``: the same ``Runner``, gait cores and impact controller) on many seeds; both analyse the
-poses with ``analyse`` and call a glider travelling by ``travelling``.
+poses with ``analyse`` and call a bound pair a glider by ``travelling`` (the glider analysis's definitions).
 
 * ``GLIDERS``: two small robots at P5's start (r 1.3 BL, theta 330 deg, phi 180 deg, P5's seeded jitter),
   robot 1's gait a tenth of a period ahead of robot 0's, open loop. In this model two robots exactly in
@@ -27,15 +27,13 @@ from typing import Any
 import numpy as np
 from smarticle_common.facts import GAIT_PERIOD, PRESETS, R_BIND_BL, RobotSpec
 from smarticle_common.gait import GaitConfig
+from smarticle_tracking.gliders import MIN_PERIODS, TRAVEL_MIN_W_PER_100
 
 #: Sim time (s) at which the gaits start (the shared ``start_at`` of config/stack.yaml): period 0 begins here.
 START_AT = 0.5
-#: The analysis rule of the demo, fixed before its seeds were run (docs/demo.md): a glider is a pair bound
-#: (centre distance under ``R_BIND_BL`` in some frame of each period) for at least this many periods in a row.
-MIN_PERIODS = 30
-#: ... and it *travels* if its net centre-of-mass displacement over its bound run is at least this many W
-#: (a lone robot drifts about 0.15 W in 100 periods, an in-phase pair 0.03 W).
-TRAVEL_MIN_W = 0.5
+# The demo's words are the glider analysis's (``smarticle_tracking.gliders``, docs/gliders.md): a bound pair is
+# bound (centre distance under ``R_BIND_BL`` in some frame of each period) for at least ``MIN_PERIODS`` periods in
+# a row, a glider is a bound pair whose centre of mass travels at least ``TRAVEL_MIN_W_PER_100`` W per 100 periods.
 #: Draws of the jittered start before giving up when the two robots overlap.
 START_ATTEMPTS = 20
 
@@ -128,7 +126,8 @@ class DemoScene:
     def monitor_params(self) -> dict[str, Any]:
         """The live glider monitor's parameters: the analysis rule in this robot's body length."""
         bl = self.spec.body_length
-        return {'min_periods': MIN_PERIODS, 'body_length': bl, 'r_bind': R_BIND_BL * bl}
+        return {'min_periods': MIN_PERIODS, 'travel_min_w_per_100': TRAVEL_MIN_W_PER_100, 'body_length': bl,
+                'r_bind': R_BIND_BL * bl}
 
     def glider_config(self) -> Any:
         """The glider analysis of the demo (``MIN_PERIODS``, ``R_BIND_BL``) in this robot's body length (= W)."""
@@ -136,7 +135,7 @@ class DemoScene:
 
         bl = self.spec.body_length
         return GliderConfig(period=GAIT_PERIOD, r_bind=R_BIND_BL * bl, min_periods=MIN_PERIODS,
-                            body_length=bl, width=bl)
+                            body_length=bl, width=bl, travel_min_w_per_100=TRAVEL_MIN_W_PER_100)
 
 
 GLIDERS = DemoScene(
@@ -224,6 +223,6 @@ def analyse(scene: DemoScene, times: np.ndarray, poses: np.ndarray) -> Any:
     return analyse_gliders(times, poses, scene.glider_config(), t0=0.0)
 
 
-def travelling(glider: Any, width: float) -> bool:
-    """Whether a glider travels by the demo's rule: net displacement >= ``TRAVEL_MIN_W`` (``width`` = W in m)."""
-    return bool(glider.distance / width >= TRAVEL_MIN_W)
+def travelling(glider: Any) -> bool:
+    """Whether a bound pair of the analysis is a glider: it travels >= ``TRAVEL_MIN_W_PER_100`` W per 100 periods."""
+    return bool(glider.is_glider)

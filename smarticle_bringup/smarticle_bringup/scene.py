@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike
 
 from smarticle_common import topics
 from smarticle_tracking.gliders import GliderClass
-from smarticle_tracking.markers import CLASS_COLOURS, ROBOT_COLOUR, RobotDims
+from smarticle_tracking.markers import BOUND_COLOUR, CLASS_COLOURS, ROBOT_COLOUR, RobotDims
 
 Rgba = tuple[float, float, float, float]
 Point = tuple[float, float, float]
@@ -79,13 +79,14 @@ class Entity:
 
 @dataclass(frozen=True)
 class GliderReport:
-    """One bound pair of ``/smarticles/gliders``: robots, class and age."""
+    """One pair bound now of ``/smarticles/gliders``: robots, class, age and the monitor's label."""
 
     i: int
     j: int
     glider_class: GliderClass
     age: float            # s
     age_periods: int
+    label: str = ''       # 'bound' before K periods, then e.g. 'C1 bound pair', 'C1 glider'
 
 
 @dataclass(frozen=True)
@@ -96,13 +97,19 @@ class SceneUpdate:
     deletions: tuple[str, ...]
 
 
+def _pair_colour(pair: GliderReport) -> Rgba:
+    """The class colour of a bound pair or glider; grey while the monitor still calls it only 'bound'."""
+    return BOUND_COLOUR if pair.label == 'bound' else CLASS_COLOURS[pair.glider_class]
+
+
 def glider_reports(statuses: Iterable[Mapping[str, str]]) -> list[GliderReport]:
     """Parse the key/values of ``/smarticles/gliders`` statuses (ValueError names a malformed one)."""
     out = []
     for values in statuses:
         try:
             out.append(GliderReport(int(values['i']), int(values['j']), GliderClass(values['class']),
-                                    float(values['age']), int(values.get('age_periods', '0'))))
+                                    float(values['age']), int(values.get('age_periods', '0')),
+                                    values.get('label', values['class'])))
         except (KeyError, ValueError) as err:
             raise ValueError(f'glider report {dict(values)} is malformed: {err}') from None
     return out
@@ -177,7 +184,7 @@ class SceneBuilder:
         """Every entity of the current scene."""
         colour_of: dict[int, Rgba] = {}
         for pair in self.gliders:
-            colour_of[pair.i] = colour_of[pair.j] = CLASS_COLOURS[pair.glider_class]
+            colour_of[pair.i] = colour_of[pair.j] = _pair_colour(pair)
         seen = np.all(np.isfinite(self.poses), axis=1) if len(self.poses) else np.zeros(0, dtype=bool)
         out = []
         for k in map(int, np.flatnonzero(seen)):
@@ -192,9 +199,9 @@ class SceneBuilder:
         for pair in self.gliders:
             if pair.i < len(seen) and pair.j < len(seen) and seen[pair.i] and seen[pair.j]:
                 a, b = self.poses[pair.i, :2], self.poses[pair.j, :2]
-                colour = CLASS_COLOURS[pair.glider_class]
+                colour = _pair_colour(pair)
                 mid = ((a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0, BODY_HEIGHT + 0.015)
-                text = f'{pair.glider_class.value} {pair.age:.1f} s ({pair.age_periods} periods)'
+                text = f'{pair.label or pair.glider_class.value} {pair.age:.1f} s ({pair.age_periods} periods)'
                 out.append(Entity(f'glider_{pair.i}_{pair.j}',
                                   lines=(Line(((float(a[0]), float(a[1]), BODY_HEIGHT),
                                                (float(b[0]), float(b[1]), BODY_HEIGHT)), colour, BOND_THICKNESS),),

@@ -143,7 +143,8 @@ TOPICS: tuple[TopicSpec, ...] = (
               'orientation (UNSEEN_Z)'),
     TopicSpec('gliders', '/smarticles/gliders', 'diagnostic_msgs/msg/DiagnosticArray', Qos.COMMAND,
               '', 'm, rad, s', 'glider monitor',
-              'one status per bound pair: ids, r, theta, phi, class C1/C2, age'),
+              'one status per pair bound now: ids, r, theta, phi, class C1/C2, age, label (bound, bound pair, '
+              'glider), travel'),
     TopicSpec('markers', '/smarticles/markers', 'visualization_msgs/msg/MarkerArray', Qos.COMMAND,
               ARENA_FRAME, 'm', 'glider monitor', 'robot outlines and glider bonds for RViz / Foxglove'),
     TopicSpec('diagnostics', '/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray', Qos.COMMAND,

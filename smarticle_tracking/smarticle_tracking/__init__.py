@@ -6,8 +6,9 @@ from smarticle_common.exports import lazy_getattr
 
 #: Public name -> the module that defines it.
 _EXPORTS: dict[str, str] = {
-    'GliderClass': 'gliders', 'GliderConfig': 'gliders', 'Glider': 'gliders', 'GliderAnalysis': 'gliders',
-    'analyse_gliders': 'gliders', 'glider_table': 'gliders', 'format_glider_table': 'gliders',
+    'GliderClass': 'gliders', 'PairKind': 'gliders', 'GliderConfig': 'gliders', 'Glider': 'gliders',
+    'GliderAnalysis': 'gliders', 'analyse_gliders': 'gliders', 'glider_table': 'gliders',
+    'format_glider_table': 'gliders',
     'plot_glider_analysis': 'glider_plots',
     'TrackerConfig': 'tracker', 'TagTracker': 'tracker',
     'msd': 'msd', 'fit_msd_exponent': 'msd',

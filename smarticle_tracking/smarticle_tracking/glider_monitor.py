@@ -3,9 +3,11 @@
 Feed ``update(time, poses)`` in time order; it returns the pairs bound right now. A pair is reported
 while its run of bound periods is open: it was bound in the last completed period, or it has bound
 (r < r_bind, the one bound rule of the batch analysis) in the current period already. Its ``age``
-counts the run's periods, the current one included once it has bound. When a period closes, runs
-that did not bind end; those of at least K periods go to ``finished`` (a bounded history). Memory is
-O(pairs + history), not O(frames).
+counts the run's periods, the current one included once it has bound. Its ``kind`` and ``label`` are
+those of the run so far (``gliders.running_labels``): 'bound' before K periods, a bound pair from K, a
+glider once it also travels the glider rate. When a period closes, runs that did not bind end; those
+of at least K periods (bound pairs) go to ``finished`` (a bounded history). Memory is O(pairs +
+history), not O(frames).
 A run's ``isolation`` counts its periods in which no third robot came within ``isolation_distance`` of
 either robot, as in the batch analysis.
 
@@ -24,13 +26,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .errors import GliderConfigError, GliderInputError
-from .gliders import (SUM_FIELDS, GliderClass, GliderConfig, classify_configuration, frame_hits,
-                      frame_sums, period_index, stretch_means)
+from .gliders import (SUM_FIELDS, GliderClass, GliderConfig, PairKind, classify_configuration, frame_hits,
+                      frame_sums, pair_kind, pair_label, period_index, stretch_means, travel_rate)
 from smarticle_common.pairs import FloatArray, IntArray, as_pose_array, pair_centres, pair_coordinates, pair_indices
 
 
 class BoundPair(NamedTuple):
-    """A pair bound now (or a finished glider): latest coordinates and the run's statistics."""
+    """A pair bound now (or a finished bound pair): latest coordinates and the run's statistics so far."""
 
     i: int
     j: int
@@ -43,10 +45,22 @@ class BoundPair(NamedTuple):
     start_time: float        # s
     age_periods: int
     age: float               # s, age_periods x T
-    is_glider: bool          # age_periods >= K
+    is_glider: bool          # a bound pair (age_periods >= K) travelling >= the glider rate so far
     distance: float          # m, net centre-of-mass displacement over the run (per-period samples)
     isolation: float = 1.0   # fraction of the run's periods with no third robot within isolation_distance
     isolated: bool = True    # isolation >= isolated_fraction: a pair, not part of a cluster
+    kind: PairKind = PairKind.BOUND      # bound (age < K), bound pair, or glider
+    travel_w_per_100: float = math.nan   # net travel in W per 100 periods of the run so far
+
+    @property
+    def is_bound_pair(self) -> bool:
+        """True once the run has lasted K periods (a glider is a bound pair too)."""
+        return self.kind is not PairKind.BOUND
+
+    @property
+    def label(self) -> str:
+        """'bound', then 'C1 bound pair', 'C1 glider', ...: only once each definition is met."""
+        return pair_label(self.kind, self.glider_class)
 
 
 class GliderMonitor:
@@ -209,6 +223,7 @@ class GliderMonitor:
         period = self.config.period
         with np.errstate(invalid='ignore', divide='ignore'):
             isolation = np.where(age > 0, 1.0 - crowded / np.maximum(age, 1), 1.0)
+        kinds = [pair_kind(int(age[k]), float(distance[k]), self.config) for k in range(len(p))]
         return [BoundPair(
             i=int(self.pairs[pk, 0]), j=int(self.pairs[pk, 1]),
             r=float(latest[k, 0]), theta=float(latest[k, 1]), phi=float(latest[k, 2]),
@@ -216,8 +231,9 @@ class GliderMonitor:
             glider_class=classify_configuration(float(phi_mean[k]), self.config.class_tolerance),
             start_period=int(start[k]), start_time=t0 + int(start[k]) * period,
             age_periods=int(age[k]), age=int(age[k]) * period,
-            is_glider=bool(age[k] >= self.config.min_periods), distance=float(distance[k]),
-            isolation=float(isolation[k]), isolated=bool(isolation[k] >= self.config.isolated_fraction))
+            is_glider=kinds[k] is PairKind.GLIDER, distance=float(distance[k]),
+            isolation=float(isolation[k]), isolated=bool(isolation[k] >= self.config.isolated_fraction),
+            kind=kinds[k], travel_w_per_100=travel_rate(float(distance[k]), int(age[k]), self.config.width))
             for k, pk in enumerate(p)]
 
     def bound_pairs(self) -> tuple[BoundPair, ...]:
@@ -228,7 +244,7 @@ class GliderMonitor:
         return tuple(self._snapshot(open_runs, include_current=True))
 
     def finish(self) -> tuple[BoundPair, ...]:
-        """End of data: close the current period; return the finished gliders, then the still-open ones."""
+        """End of data: close the current period; return the finished bound pairs, then the still-open ones."""
         if self._period is None or self._done:
             return tuple(self.finished)
         self._close_period()

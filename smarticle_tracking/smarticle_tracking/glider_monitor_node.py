@@ -3,7 +3,8 @@
 Subscribes ``/smarticles/poses`` (index = robot id; the unseen pose of ``topics.UNSEEN_Z`` = not seen;
 yaw = heading of the body normal) and, with ``show_arms``, ``/smarticle_<k>/joint_states``. Feeds
 ``GliderMonitor`` (all maths there) and publishes, every ``publish_period`` of message time,
-``/smarticles/gliders`` (one DiagnosticStatus per bound pair) and ``/smarticles/markers`` (robot
+``/smarticles/gliders`` (one DiagnosticStatus per pair bound now, its ``label`` the run's words so far:
+'bound', then 'C1 bound pair', 'C1 glider', ...) and ``/smarticles/markers`` (robot
 outlines and glider bonds, from ``markers.scene_markers``). Faults go to ``/diagnostics``. See docs/tracking.md.
 """
 
@@ -36,21 +37,25 @@ from .parameters import MONITOR_NODE, MONITOR_PARAMS, monitor_settings
 _KINDS = {'line_list': Marker.LINE_LIST, 'text': Marker.TEXT_VIEW_FACING}
 
 
-def glider_status(pair: BoundPair, body_length: float) -> DiagnosticStatus:
-    """One DiagnosticStatus describing a bound pair (SI values, plus BL and degrees for people)."""
+def glider_status(pair: BoundPair, body_length: float, width: float | None = None) -> DiagnosticStatus:
+    """One DiagnosticStatus describing a pair bound now (SI values, plus BL, W and degrees for people)."""
+    w = body_length if width is None else width
     values = {
-        'i': str(pair.i), 'j': str(pair.j), 'class': pair.glider_class.value,
+        'i': str(pair.i), 'j': str(pair.j), 'class': pair.glider_class.value, 'kind': pair.kind.value,
+        'label': pair.label,
         'r': f'{pair.r:.5f}', 'r_bl': f'{pair.r / body_length:.3f}',
         'theta': f'{pair.theta:.4f}', 'theta_deg': f'{math.degrees(pair.theta):.1f}',
         'phi': f'{pair.phi:.4f}', 'phi_deg': f'{math.degrees(pair.phi):.1f}',
         'phi_mean_deg': f'{math.degrees(pair.phi_mean):.1f}',
         'age': f'{pair.age:.3f}', 'age_periods': str(pair.age_periods),
         'start_time': f'{pair.start_time:.3f}', 'is_glider': str(pair.is_glider).lower(),
-        'distance': f'{pair.distance:.5f}', 'isolation': f'{pair.isolation:.3f}',
-        'isolated': str(pair.isolated).lower()}
+        'bound_pair': str(pair.is_bound_pair).lower(),
+        'distance': f'{pair.distance:.5f}', 'travel_w': f'{pair.distance / w:.3f}',
+        'travel_w_per_100': f'{pair.travel_w_per_100:.3f}', 'travels': str(pair.is_glider).lower(),
+        'isolation': f'{pair.isolation:.3f}', 'isolated': str(pair.isolated).lower()}
     return DiagnosticStatus(
-        level=DiagnosticStatus.OK, name=f'glider {pair.i}-{pair.j}', hardware_id=f'smarticles {pair.i} {pair.j}',
-        message=f'{pair.glider_class.value} bound {pair.age_periods} periods',
+        level=DiagnosticStatus.OK, name=f'pair {pair.i}-{pair.j}', hardware_id=f'smarticles {pair.i} {pair.j}',
+        message=f'{pair.label}, bound {pair.age_periods} periods, travel {pair.distance / w:.2f} W',
         values=[KeyValue(key=k, value=v) for k, v in values.items()])
 
 
@@ -144,7 +149,7 @@ class GliderMonitorNode(Node):
         """Publish the bound pairs and the markers of this frame."""
         bl = self.settings.glider.body_length
         array = DiagnosticArray(header=header)
-        array.status = [glider_status(pair, bl) for pair in self.bound]
+        array.status = [glider_status(pair, bl, self.settings.glider.width) for pair in self.bound]
         self.gliders_pub.publish(array)
         arms = self.arms[:len(poses)] if self.settings.show_arms else None
         shapes = scene_markers(poses, self.bound, arms, self.settings.dims, bl)
@@ -157,9 +162,9 @@ class GliderMonitorNode(Node):
 
     def destroy_node(self) -> None:
         """Log the run's glider report (one line, for the launcher), then destroy the node."""
-        w = self.settings.glider.body_length
-        pairs = '; '.join(f'{p.i}-{p.j} {p.glider_class.value}, bound {p.age_periods} periods, travel '
-                          f'{p.distance / w:.2f} W' for p in self.monitor.finish())
+        w = self.settings.glider.width
+        pairs = '; '.join(f'{p.i}-{p.j} {p.label}, bound {p.age_periods} periods, travel {p.distance / w:.2f} W'
+                          for p in self.monitor.finish())
         self.get_logger().info(report_line(f'glider report: {pairs or "no bound pair"}'))
         super().destroy_node()
 

@@ -27,7 +27,8 @@ def _save(fig: Figure, path: str | Path, dpi: int) -> Path:
 
 def plot_glider_analysis(analysis: GliderAnalysis, path: str | Path, max_gliders: int = 6,
                          dpi: int = 120) -> Path:
-    """Write a PNG of r(t) (BL), phi(t) (deg) and the paths of each glider's robots and centre of mass."""
+    """Write a PNG of r(t) (BL), phi(t) (deg) and the paths of each bound pair's robots and centre of mass,
+    each labelled by its class and kind ('C1 glider', 'C1 bound pair')."""
     cfg = analysis.config
     gliders = analysis.gliders[:max_gliders]
     fig = Figure(figsize=(12, 4.2), layout='constrained')
@@ -38,12 +39,12 @@ def plot_glider_analysis(analysis: GliderAnalysis, path: str | Path, max_gliders
         for p in range(coords.pairs.shape[0]):
             ax_r.plot(t, coords.r[:, p] / cfg.body_length, lw=0.5, color='0.6')
             ax_phi.plot(t, np.degrees(coords.phi[:, p]), '.', ms=0.5, color='0.6')
-        ax_xy.text(0.5, 0.5, f'no gliders (K = {cfg.min_periods} periods)', ha='center',
+        ax_xy.text(0.5, 0.5, f'no bound pair (K = {cfg.min_periods} periods), no glider', ha='center',
                    transform=ax_xy.transAxes)
     colours = [f'C{k}' for k in range(10)]
     for k, g in enumerate(gliders):
         c = colours[k % len(colours)]
-        label = f'({g.i},{g.j}) {g.glider_class.value}, {g.lifetime_periods} T'
+        label = f'({g.i},{g.j}) {g.label}, {g.lifetime_periods} T, {g.distance / cfg.width:.2f} W'
         ax_r.plot(t, coords.r[:, g.pair_index] / cfg.body_length, lw=0.7, color=c, label=label)
         ax_r.axvspan(g.start_time, g.end_time, color=c, alpha=0.08)
         ax_phi.plot(t, np.degrees(coords.phi[:, g.pair_index]), '.', ms=1.0, color=c)

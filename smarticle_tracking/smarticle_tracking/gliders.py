@@ -1,24 +1,32 @@
-"""Glider analysis: bound pairs per gait period, C1/C2 class, lifetime, transport, MSD exponent.
+"""Glider analysis: bound pairs per gait period, gliders, C1/C2 class, lifetime, transport, MSD exponent.
 
-Definitions (also in docs/gliders.md):
+The definitions, stated here once and used by the batch analysis, the live monitor, ``smarticle-bag
+analyze``, the demo and the experiments (also in docs/gliders.md and docs/glossary.md):
 
 * **Periods.** Period ``q`` covers times ``[t0 + q T, t0 + (q + 1) T)``; ``t0`` is the gait start
   (default: the first frame). Frames before ``t0`` belong to no period and are ignored.
 * **Bound (the one rule).** Pair (i, j) is bound in period q if, in at least one frame of q, their
   centre distance r is below ``r_bind`` (default ``R_BIND_BL`` = 1.6 BL, from the poses alone). The
-  batch analysis, the live monitor, ``smarticle-bag analyze`` and the experiments all use this rule
-  on poses; the optional ``contacts`` input (touching counts as bound too) is a diagnostic that no
-  shipped analysis uses. A frame where either robot is unseen (NaN pose) gives no r. A period with
-  no frames at all is unbound.
-* **Isolated.** A glider's ``isolation`` is the fraction of its bound periods in which no third
-  robot's centre comes within ``isolation_distance`` (default 2 W) of either glider robot's centre in
-  any seen frame of the period; the glider is **isolated** (a pair, not part of a cluster or train)
-  if ``isolation >= isolated_fraction`` (default 0.9). With two robots every glider is isolated.
-* **Glider.** A run of at least ``min_periods`` (K) consecutive bound periods. Its lifetime is the run
-  length (periods, and seconds = periods x T); ``ongoing`` marks a run still bound in the last
-  period of the data (its lifetime is then a lower bound).
-* **Class.** From the circular mean of phi over every seen frame of the run: C1 if within
-  ``class_tolerance`` of pi (anti-aligned), C2 if within it of 0 (aligned), else unclassified.
+  optional ``contacts`` input (touching counts as bound too) is a diagnostic that no shipped analysis
+  uses. A frame where either robot is unseen (NaN pose) gives no r. A period with no frames is unbound.
+* **Bound pair.** A run of at least ``min_periods`` (K, default 30) consecutive bound periods. Its
+  lifetime is the run length (periods, and seconds = periods x T); ``ongoing`` marks a run still bound
+  in the last period of the data (its lifetime is then a lower bound). The ``Glider`` records of an
+  analysis are its bound pairs.
+* **Glider.** A bound pair that travels: the net displacement of its centre of mass over its run is at
+  least ``travel_min_w_per_100`` (default ``TRAVEL_MIN_W_PER_100`` = 1 W) per 100 periods of the run
+  (0.3 W over a run of 30 periods, 0.4 W over 40). A still pair is a bound pair, not a glider.
+* **Class**, by bands of the circular mean of phi over every seen frame of the run: **C1** within
+  ``class_tolerance`` (default 45 deg) of 180 deg (135 to 225 deg, anti-aligned), **C2** within it of
+  0 deg (315 to 45 deg, aligned), else **unclassified** (between the bands).
+* **Labels while a run goes on** (the live monitor, the demo's animation): after n bound periods the
+  run so far is ``bound`` (n < K), a ``bound pair`` (n >= K) or a ``glider`` (a bound pair whose
+  per-period samples so far travel at least the glider rate over n periods); its class is that of the
+  mean phi so far. A label appears only once its definition is met.
+* **Isolated.** A bound pair's ``isolation`` is the fraction of its bound periods in which no third
+  robot's centre comes within ``isolation_distance`` (default 2 W) of either robot's centre in any seen
+  frame of the period; it is **isolated** (a pair, not part of a cluster or train) if ``isolation >=
+  isolated_fraction`` (default 0.9). With two robots every bound pair is isolated.
 * **Centre-of-mass path.** One sample per period of the run: the pair's centre of mass (mean of the
   two body centres) at the first frame of the period in which both robots are seen (a stroboscopic
   sample at nearly the same gait phase, so the within-cycle wiggle drops out); NaN if never seen.
@@ -58,17 +66,33 @@ BoolArray = NDArray[np.bool_]
 DEFAULT_R_BIND = R_BIND_BL * BODY_LENGTH
 #: Default isolation distance: no third robot's centre within 2 W of either glider robot's centre.
 DEFAULT_ISOLATION_DISTANCE = 2.0 * BODY_LENGTH
+#: Default K: a run of this many consecutive bound periods is a bound pair (the paper's 30 for lifetimes).
+MIN_PERIODS = 30
+#: The glider rule: a bound pair whose centre of mass travels (net) at least this many W per 100 periods of
+#: its run. A lone robot drifts about 0.15 W per 100 periods, a still in-phase pair 0.1 W or less, P1's dense
+#: bound pairs 0.3 W (median); a pair gliding a tenth of a period apart 3-4 W (docs/gliders.md).
+TRAVEL_MIN_W_PER_100 = 1.0
+#: The class bands: C1 within this of 180 deg (135 to 225 deg), C2 within it of 0 deg (315 to 45 deg).
+CLASS_TOLERANCE = math.radians(45.0)
 #: Per-frame sums accumulated per period, in this order along the last axis.
 SUM_FIELDS: tuple[str, ...] = ('count', 'r', 'phi_cos', 'phi_sin', 'theta_cos', 'theta_sin')
 _PERIOD_EPS = 1e-9
 
 
 class GliderClass(Enum):
-    """Binding symmetry of a glider (paper Fig. 2)."""
+    """Binding symmetry of a bound pair or glider (paper Fig. 2), by the band of its mean phi."""
 
-    C1 = 'C1'                       # nearly anti-aligned, phi near pi
-    C2 = 'C2'                       # nearly aligned, phi near 0 / 2 pi
-    UNCLASSIFIED = 'unclassified'   # phi mean farther than the tolerance from both
+    C1 = 'C1'                       # anti-aligned: phi within the tolerance of pi (135 to 225 deg by default)
+    C2 = 'C2'                       # aligned: phi within the tolerance of 0 (315 to 45 deg by default)
+    UNCLASSIFIED = 'unclassified'   # phi mean between the bands
+
+
+class PairKind(Enum):
+    """What a run of bound periods is, by the definitions above."""
+
+    BOUND = 'bound'                 # bound in fewer than K consecutive periods so far
+    BOUND_PAIR = 'bound pair'       # bound >= K periods, travelling less than the glider rate
+    GLIDER = 'glider'               # a bound pair travelling >= the glider rate
 
 
 @dataclass(frozen=True)
@@ -77,8 +101,8 @@ class GliderConfig:
 
     period: float = GAIT_PERIOD
     r_bind: float = DEFAULT_R_BIND
-    min_periods: int = 30
-    class_tolerance: float = math.radians(45.0)
+    min_periods: int = MIN_PERIODS
+    class_tolerance: float = CLASS_TOLERANCE
     body_length: float = BODY_LENGTH
     width: float = BODY_LENGTH
     msd_min_lag: int = 1
@@ -86,6 +110,7 @@ class GliderConfig:
     msd_subtract_mean: bool = False
     isolation_distance: float = DEFAULT_ISOLATION_DISTANCE
     isolated_fraction: float = 0.9
+    travel_min_w_per_100: float = TRAVEL_MIN_W_PER_100
 
     def __post_init__(self) -> None:
         for name in ('period', 'r_bind', 'body_length', 'width', 'isolation_distance'):
@@ -94,6 +119,10 @@ class GliderConfig:
                 raise GliderConfigError(f'{name} must be a positive finite number, got {value!r}')
         if not _is_count(self.min_periods) or self.min_periods < 1:
             raise GliderConfigError(f'min_periods (K) must be a whole number >= 1, got {self.min_periods!r}')
+        rate = self.travel_min_w_per_100
+        if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate >= 0.0):
+            raise GliderConfigError(f'travel_min_w_per_100 (the glider rule, W per 100 periods) must be a finite '
+                                    f'number >= 0, got {rate!r}')
         frac = self.isolated_fraction
         if not (isinstance(frac, (int, float)) and 0.0 <= frac <= 1.0):
             raise GliderConfigError(f'isolated_fraction must be in [0, 1], got {frac!r}')
@@ -114,8 +143,8 @@ def _is_count(value: object) -> bool:
     return isinstance(value, (int, np.integer)) and not isinstance(value, bool)
 
 
-def classify_configuration(phi: float, tolerance: float = math.radians(45.0)) -> GliderClass:
-    """Classify a (mean) relative heading phi (rad) as C1 (near pi), C2 (near 0) or unclassified."""
+def classify_configuration(phi: float, tolerance: float = CLASS_TOLERANCE) -> GliderClass:
+    """Classify a (mean) relative heading phi (rad) by its band: C1 (near pi), C2 (near 0) or unclassified."""
     if not math.isfinite(phi):
         return GliderClass.UNCLASSIFIED
     if float(angular_distance(phi, math.pi)) <= tolerance:
@@ -123,6 +152,28 @@ def classify_configuration(phi: float, tolerance: float = math.radians(45.0)) ->
     if float(angular_distance(phi, 0.0)) <= tolerance:
         return GliderClass.C2
     return GliderClass.UNCLASSIFIED
+
+
+def travel_rate(distance: float, periods: int, width: float) -> float:
+    """Net travel ``distance`` (m) of a run of ``periods`` periods in W per 100 periods (NaN if unknown)."""
+    if periods < 1 or not math.isfinite(distance):
+        return math.nan
+    return 100.0 * distance / width / periods
+
+
+def pair_kind(periods: int, distance: float, config: GliderConfig) -> PairKind:
+    """Bound, bound pair or glider: a run of ``periods`` bound periods whose centre travelled ``distance`` (m)."""
+    if periods < config.min_periods:
+        return PairKind.BOUND
+    rate = travel_rate(distance, periods, config.width)
+    return PairKind.GLIDER if rate >= config.travel_min_w_per_100 else PairKind.BOUND_PAIR
+
+
+def pair_label(kind: PairKind, glider_class: GliderClass) -> str:
+    """The words for a run: 'bound' before K periods, then e.g. 'C1 bound pair' or 'C1 glider'."""
+    if kind is PairKind.BOUND:
+        return kind.value
+    return f'{glider_class.value} {kind.value}'
 
 
 def period_index(times: ArrayLike, t0: float, period: float) -> IntArray:
@@ -203,7 +254,8 @@ def bound_runs(bound: ArrayLike) -> Runs:
 
 @dataclass(frozen=True, eq=False)
 class Glider:
-    """One glider: a pair bound for at least K consecutive periods, with its transport statistics."""
+    """One bound pair (bound for at least K consecutive periods) with its transport statistics; a glider
+    when ``is_glider`` (it travels at least the glider rate)."""
 
     i: int
     j: int
@@ -224,6 +276,8 @@ class Glider:
     beta: float                    # MSD exponent, NaN if the run is too short to fit
     isolation: float               # fraction of its periods with no third robot within isolation_distance
     isolated: bool                 # isolation >= config.isolated_fraction: a pair, not part of a cluster
+    travel_w_per_100: float        # net travel in W per 100 periods of the run (NaN if never seen)
+    kind: PairKind                 # BOUND_PAIR or GLIDER
     com_path: FloatArray = field(repr=False)   # (lifetime_periods, 2) per-period samples, NaN unseen
     msd: MsdResult = field(repr=False)
 
@@ -231,6 +285,16 @@ class Glider:
     def end_time(self) -> float:
         """End of the last bound period (s)."""
         return self.start_time + self.lifetime
+
+    @property
+    def is_glider(self) -> bool:
+        """True when this bound pair travels at least the glider rate."""
+        return self.kind is PairKind.GLIDER
+
+    @property
+    def label(self) -> str:
+        """'C1 glider', 'C2 bound pair', ...: class and kind."""
+        return pair_label(self.kind, self.glider_class)
 
 
 @dataclass(frozen=True, eq=False)
@@ -367,18 +431,21 @@ def measure_run(table: PeriodTable, pairs: IntArray, pair: int, start: int, stop
                  subtract_mean=config.msd_subtract_mean)
     phi_mean = float(means.phi)
     i, j = int(pairs[pair, 0]), int(pairs[pair, 1])
+    lifetime = int(stop - start)
     isolation = 1.0 if frame_periods is None or poses is None else \
         isolation_fraction(frame_periods, poses, i, j, start, stop, config)
     return Glider(
         i=i, j=j, pair_index=int(pair),
-        start_period=int(start), lifetime_periods=int(stop - start),
-        start_time=float(table.start_times[start]), lifetime=float((stop - start) * config.period),
+        start_period=int(start), lifetime_periods=lifetime,
+        start_time=float(table.start_times[start]), lifetime=float(lifetime * config.period),
         ongoing=bool(stop == table.bound.shape[0]),
         glider_class=classify_configuration(phi_mean, config.class_tolerance),
         r_mean=float(means.r), theta_mean=float(means.theta), phi_mean=phi_mean,
         distance=stats.distance, path_length=stats.path_length, v_com=stats.v_com,
         net_speed=stats.net_speed, beta=_fit_beta(result, config), isolation=isolation,
-        isolated=bool(isolation >= config.isolated_fraction), com_path=path, msd=result)
+        isolated=bool(isolation >= config.isolated_fraction),
+        travel_w_per_100=travel_rate(stats.distance, lifetime, config.width),
+        kind=pair_kind(lifetime, stats.distance, config), com_path=path, msd=result)
 
 
 def analyse_gliders(times: ArrayLike, poses: ArrayLike, config: GliderConfig | None = None,
@@ -408,6 +475,26 @@ def analyse_gliders(times: ArrayLike, poses: ArrayLike, config: GliderConfig | N
     return GliderAnalysis(cfg, start, t, arr, coords, table, gliders)
 
 
+def running_labels(analysis: GliderAnalysis, glider: Glider) -> tuple[str, ...]:
+    """The label of ``glider``'s run as known after each of its periods: entry n - 1 after n bound periods
+    ('bound' before K, then 'C1 bound pair', 'C1 glider', ...; class by the mean phi so far, travel by the
+    per-period samples so far), what the live monitor reports in the run's n-th period."""
+    cfg = analysis.config
+    stop = glider.start_period + glider.lifetime_periods
+    sums = np.cumsum(analysis.periods.sums[glider.start_period:stop, glider.pair_index], axis=0)
+    phi = np.asarray(stretch_means(sums).phi, dtype=float).reshape(-1)
+    path = glider.com_path
+    index = np.arange(len(path))
+    seen = np.all(np.isfinite(path), axis=1)
+    last = np.maximum.accumulate(np.where(seen, index, -1))
+    first = int(np.argmax(seen)) if seen.any() else 0
+    with np.errstate(invalid='ignore'):
+        distance = np.where(last >= 0, np.linalg.norm(path[np.maximum(last, 0)] - path[first], axis=1), np.nan)
+    return tuple(pair_label(pair_kind(n + 1, float(distance[n]), cfg),
+                            classify_configuration(float(phi[n]), cfg.class_tolerance))
+                 for n in range(glider.lifetime_periods))
+
+
 def ensemble_msd(gliders: Iterable[Glider], max_lag: int | None = None,
                  subtract_mean: bool = True) -> MsdResult:
     """The paper's ``<x^2> - <x>^2`` over all time origins of all given gliders' per-period paths."""
@@ -419,27 +506,28 @@ def ensemble_msd(gliders: Iterable[Glider], max_lag: int | None = None,
 
 #: Columns of the glider table: key, header, format.
 TABLE_COLUMNS: tuple[tuple[str, str, str], ...] = (
-    ('i', 'i', '{:d}'), ('j', 'j', '{:d}'), ('class', 'class', '{}'),
+    ('i', 'i', '{:d}'), ('j', 'j', '{:d}'), ('class', 'class', '{}'), ('kind', 'kind', '{}'),
     ('start_s', 'start [s]', '{:.1f}'), ('start_period', 'start [T]', '{:d}'),
     ('lifetime_periods', 'life [T]', '{:d}'), ('lifetime_s', 'life [s]', '{:.1f}'),
     ('ongoing', 'ongoing', '{}'), ('isolated', 'isolated', '{}'), ('phi_deg', 'phi [deg]', '{:.0f}'),
     ('r_bl', 'r [BL]', '{:.2f}'),
-    ('distance_w', 'dist [W]', '{:.2f}'), ('path_w', 'path [W]', '{:.2f}'),
-    ('beta', 'beta', '{:.2f}'), ('v_com_mm_s', 'V_com [mm/s]', '{:.2f}'),
+    ('distance_w', 'dist [W]', '{:.2f}'), ('travel_w_per_100', 'W / 100 T', '{:.2f}'), ('travels', 'travels', '{}'),
+    ('path_w', 'path [W]', '{:.2f}'), ('beta', 'beta', '{:.2f}'), ('v_com_mm_s', 'V_com [mm/s]', '{:.2f}'),
 )
 
 
 def glider_table(gliders: Sequence[Glider], config: GliderConfig | None = None,
                  ) -> list[dict[str, object]]:
-    """One row per glider: ids, class, start, lifetime, distance (W), beta, V_com (user units)."""
+    """One row per bound pair: ids, class, kind, start, lifetime, travel (W, W per 100 periods), beta, V_com."""
     cfg = GliderConfig() if config is None else config
     return [{
-        'i': g.i, 'j': g.j, 'class': g.glider_class.value,
+        'i': g.i, 'j': g.j, 'class': g.glider_class.value, 'kind': g.kind.value,
         'start_s': g.start_time, 'start_period': g.start_period,
         'lifetime_periods': g.lifetime_periods, 'lifetime_s': g.lifetime, 'ongoing': g.ongoing,
         'isolated': g.isolated, 'isolation': g.isolation,
         'phi_deg': math.degrees(g.phi_mean), 'r_bl': g.r_mean / cfg.body_length,
-        'distance_w': g.distance / cfg.width, 'path_w': g.path_length / cfg.width,
+        'distance_w': g.distance / cfg.width, 'travel_w_per_100': g.travel_w_per_100, 'travels': g.is_glider,
+        'path_w': g.path_length / cfg.width,
         'beta': g.beta, 'v_com_mm_s': 1e3 * g.v_com,
     } for g in gliders]
 
@@ -451,10 +539,31 @@ def _cell(fmt: str, value: object) -> str:
     return fmt.format(value)
 
 
+def rule_text(config: GliderConfig) -> str:
+    """The definitions in one line, with the config's numbers (for the tables' headers)."""
+    bl = config.r_bind / config.body_length
+    tol = math.degrees(config.class_tolerance)
+    return (f'bound pair: centre distance under {bl:.1f} BL in some frame of each of >= {config.min_periods} '
+            f'periods in a row; glider: a bound pair whose centre of mass travels >= '
+            f'{config.travel_min_w_per_100:g} W per 100 periods (net); C1: mean phi {180 - tol:.0f}-{180 + tol:.0f} '
+            f'deg, C2: {360 - tol:.0f}-{tol:.0f} deg')
+
+
+def glider_summary(gliders: Sequence[Glider]) -> str:
+    """'2 bound pairs, 1 of them a glider (0-1 C1)': the count line of a report."""
+    if not gliders:
+        return 'no bound pair, no glider'
+    moving = [g for g in gliders if g.is_glider]
+    names = ', '.join(f'{g.i}-{g.j} {g.glider_class.value}' for g in moving)
+    return (f'{len(gliders)} bound pair{"s" if len(gliders) != 1 else ""}, '
+            + (f'{len(moving)} of them {"a glider" if len(moving) == 1 else "gliders"} ({names})' if moving
+               else 'no glider'))
+
+
 def format_glider_table(rows: Sequence[Mapping[str, object]]) -> str:
     """Format glider_table rows as an aligned plain-text table."""
     if not rows:
-        return 'no gliders found'
+        return 'no bound pairs, so no gliders'
     header = [title for _, title, _ in TABLE_COLUMNS]
     body = [[_cell(fmt, row[key]) for key, _, fmt in TABLE_COLUMNS] for row in rows]
     widths = [max(len(line[c]) for line in [header, *body]) for c in range(len(header))]

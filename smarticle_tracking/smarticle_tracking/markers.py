@@ -31,6 +31,8 @@ CLASS_COLOURS: dict[GliderClass, Rgba] = {
     GliderClass.C2: (1.0, 0.55, 0.0, 1.0),
     GliderClass.UNCLASSIFIED: (0.75, 0.3, 0.9, 1.0),
 }
+#: A pair bound fewer than K periods: not yet a bound pair, so drawn without a class colour.
+BOUND_COLOUR: Rgba = (0.6, 0.6, 0.6, 1.0)
 ROBOT_COLOUR: Rgba = (0.85, 0.85, 0.85, 1.0)
 TEXT_COLOUR: Rgba = (1.0, 1.0, 1.0, 1.0)
 OUTLINE_WIDTH = 0.0015   # m
@@ -95,6 +97,11 @@ def robot_outline(pose: ArrayLike, arm_angles: ArrayLike | None, dims: RobotDims
     return tuple(points)
 
 
+def pair_colour(pair: BoundPair) -> Rgba:
+    """The class colour of a bound pair or glider; grey while the run is shorter than K periods."""
+    return CLASS_COLOURS[pair.glider_class] if pair.is_bound_pair else BOUND_COLOUR
+
+
 def scene_markers(poses: ArrayLike, bound: Sequence[BoundPair], arm_angles: ArrayLike | None = None,
                   dims: RobotDims | None = None, body_length: float | None = None) -> list[MarkerShape]:
     """Markers of one moment: DELETEALL, then robots (outline + id), then a bond + label per bound pair."""
@@ -104,7 +111,7 @@ def scene_markers(poses: ArrayLike, bound: Sequence[BoundPair], arm_angles: Arra
     arms = None if arm_angles is None else np.asarray(arm_angles, dtype=float).reshape(-1, 2)
     colour_of: dict[int, Rgba] = {}
     for pair in bound:
-        colour_of[pair.i] = colour_of[pair.j] = CLASS_COLOURS[pair.glider_class]
+        colour_of[pair.i] = colour_of[pair.j] = pair_colour(pair)
     shapes = [MarkerShape('', 0, 'delete_all', (), (0.0, 0.0, 0.0, 0.0))]
     seen = np.all(np.isfinite(arr), axis=1)
     for k in map(int, np.flatnonzero(seen)):
@@ -118,10 +125,10 @@ def scene_markers(poses: ArrayLike, bound: Sequence[BoundPair], arm_angles: Arra
             continue
         a = (float(arr[pair.i, 0]), float(arr[pair.i, 1]))
         b = (float(arr[pair.j, 0]), float(arr[pair.j, 1]))
-        colour = CLASS_COLOURS[pair.glider_class]
+        colour = pair_colour(pair)
         shapes.append(MarkerShape('gliders', n, 'line_list', (a, b), colour, BOND_WIDTH))
         mid = ((a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0 + 0.03)
-        text = (f'{pair.glider_class.value} {pair.i}-{pair.j}  r={pair.r / bl:.2f} BL  '
+        text = (f'{pair.label} {pair.i}-{pair.j}  r={pair.r / bl:.2f} BL  '
                 f'phi={math.degrees(pair.phi):.0f} deg  {pair.age_periods} T')
         shapes.append(MarkerShape('glider_labels', n, 'text', (mid,), colour, TEXT_HEIGHT, text))
     return shapes

@@ -16,7 +16,7 @@ from smarticle_common.params import ParamSpec, defaults_yaml
 
 from .errors import TrackingError
 from .homography import Calibration, load_calibration
-from .gliders import DEFAULT_ISOLATION_DISTANCE, DEFAULT_R_BIND, GliderConfig
+from .gliders import DEFAULT_ISOLATION_DISTANCE, DEFAULT_R_BIND, MIN_PERIODS, TRAVEL_MIN_W_PER_100, GliderConfig
 from .markers import RobotDims
 from smarticle_common.pairs import BODY_LENGTH
 from .tracker import TrackerConfig
@@ -52,17 +52,19 @@ MONITOR_PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec('period', GAIT_PERIOD, 'gait period T (s)', 0.01, 3600.0),
     ParamSpec('r_bind', DEFAULT_R_BIND, 'a pair is bound in a period if its centre distance falls below '
               'this (m) in any frame of it (the one bound rule, docs/gliders.md)', 1e-4, 10.0),
-    ParamSpec('min_periods', 30, 'K: bound periods in a row that make a glider', 1, 100000),
-    ParamSpec('isolation_distance', DEFAULT_ISOLATION_DISTANCE, 'a glider period is crowded if a third robot '
-              'comes within this of either glider robot (m)', 1e-4, 10.0),
-    ParamSpec('isolated_fraction', 0.9, 'a glider is isolated (a pair, not a cluster) if at least this '
+    ParamSpec('min_periods', MIN_PERIODS, 'K: bound periods in a row that make a bound pair', 1, 100000),
+    ParamSpec('travel_min_w_per_100', TRAVEL_MIN_W_PER_100, 'a bound pair is a glider if its centre of mass '
+              'travels (net) at least this many W per 100 periods of its run', 0.0, 1000.0),
+    ParamSpec('isolation_distance', DEFAULT_ISOLATION_DISTANCE, 'a bound period is crowded if a third robot '
+              'comes within this of either robot of the pair (m)', 1e-4, 10.0),
+    ParamSpec('isolated_fraction', 0.9, 'a bound pair is isolated (a pair, not a cluster) if at least this '
               'fraction of its periods is not crowded', 0.0, 1.0),
     ParamSpec('class_tolerance_deg', 45.0, 'C1 if the mean phi is within this of 180 deg, C2 of 0 deg',
               0.1, 90.0),
-    ParamSpec('body_length', BODY_LENGTH, 'BL = W (m): the unit of r_bl in the reports', 1e-4, 10.0),
+    ParamSpec('body_length', BODY_LENGTH, 'BL = W (m): the unit of r_bl and travel_w in the reports', 1e-4, 10.0),
     ParamSpec('start_at', -1.0, "start of period 0 (s, message time): the gait nodes' start_at (the shared "
               'stack.yaml gives both); negative = the first frame', -1.0, 1e9),
-    ParamSpec('history', 100, 'finished gliders kept', 1, 100000),
+    ParamSpec('history', 100, 'finished bound pairs kept', 1, 100000),
     ParamSpec('publish_period', 0.1, 'message-time seconds between reports (0 = every frame)', 0.0, 3600.0),
     ParamSpec('show_arms', True, 'subscribe to /smarticle_<k>/joint_states and draw the arms'),
     ParamSpec('body_width', SMALL.body_width, 'marker geometry: body width along the joint axis (m)', 1e-4, 1.0),
@@ -118,6 +120,7 @@ def monitor_settings(values: dict[str, Any]) -> MonitorSettings:
     glider = GliderConfig(period=values['period'], r_bind=values['r_bind'], min_periods=values['min_periods'],
                           isolation_distance=values['isolation_distance'],
                           isolated_fraction=values['isolated_fraction'],
+                          travel_min_w_per_100=values['travel_min_w_per_100'],
                           class_tolerance=math.radians(values['class_tolerance_deg']),
                           body_length=values['body_length'], width=values['body_length'])
     dims = RobotDims(values['body_width'], values['body_depth'], values['arm_length'], values['arm_thickness'])

@@ -10,21 +10,25 @@ from pathlib import Path
 
 import numpy as np
 
-from .gliders import GliderAnalysis, GliderConfig, analyse_gliders, format_glider_table, glider_table
+from .gliders import (GliderAnalysis, GliderConfig, analyse_gliders, format_glider_table, glider_summary, glider_table,
+                      rule_text)
 
 
 @dataclass(frozen=True)
 class GliderReport:
-    """A run's glider analysis, its table as text and the figure written (None without gliders)."""
+    """A run's glider analysis, its table as text, the figure written (None without a bound pair), the count
+    line ('2 bound pairs, 1 of them a glider (0-1 C1)') and the definitions with their numbers."""
 
     analysis: GliderAnalysis
     table: str
     figure: Path | None
+    summary: str
+    rule: str
 
 
 def glider_report(times: np.ndarray, poses: np.ndarray, config: GliderConfig,
                   figure: str | Path | None = None) -> GliderReport:
-    """Analyse ``poses`` (T, N, 3) at ``times`` (s); write ``figure`` (PNG) when a glider formed."""
+    """Analyse ``poses`` (T, N, 3) at ``times`` (s); write ``figure`` (PNG) when a bound pair formed."""
     analysis = analyse_gliders(times, poses, config)
     rows = glider_table(analysis.gliders, config)
     written = None
@@ -32,4 +36,5 @@ def glider_report(times: np.ndarray, poses: np.ndarray, config: GliderConfig,
         from .glider_plots import plot_glider_analysis
 
         written = plot_glider_analysis(analysis, Path(figure))
-    return GliderReport(analysis, format_glider_table(rows) if rows else '  none', written)
+    return GliderReport(analysis, format_glider_table(rows) if rows else '  none', written,
+                        glider_summary(analysis.gliders), rule_text(config))

@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))   # the repository root: tests.* helpers
-from smarticle_bringup.demo_scenes import (FEEDBACK, GLIDERS, MIN_PERIODS, SCENES, TRAVEL_MIN_W, DemoScene,
+from smarticle_bringup.demo_scenes import (FEEDBACK, GLIDERS, MIN_PERIODS, SCENES, TRAVEL_MIN_W_PER_100, DemoScene,
                                            analyse, run_batch, travelling)
 from smarticle_common.cli import seeds_argument
 from tests.benchmarks._common import machine_line, markdown_table, out_path, write_csv
@@ -44,8 +44,8 @@ def shared_windows() -> dict[str, Any]:
 
 def glider_row(scene: DemoScene, seed: int, periods: float, windows: dict[str, Any] | None = None,
                clock_noise: bool = False) -> dict[str, Any]:
-    """One seed of the gliders scene: its start, its gliders and whether one travels (with ``windows``: with
-    the impact controller of those windows, and its halts)."""
+    """One seed of the gliders scene: its start, its bound pairs and whether one is a glider (travels; with
+    ``windows``: with the impact controller of those windows, and its halts)."""
     start = scene.start_for(seed)
     wall0 = time.perf_counter()
     run = run_batch(scene, seed, periods, feedback=windows is not None, windows=windows, clock_noise=clock_noise)
@@ -53,14 +53,15 @@ def glider_row(scene: DemoScene, seed: int, periods: float, windows: dict[str, A
     width = scene.spec.body_length
     gliders = analyse(scene, run.times, run.poses).gliders
     best = max(gliders, key=lambda g: g.distance, default=None)
-    moving = [g for g in gliders if travelling(g, width)]
+    moving = [g for g in gliders if travelling(g)]
     return {
         'seed': seed, 'start': f'{start.r_bl:.2f} / {start.theta_deg:.0f} / {start.phi_deg:.0f}',
-        'gliders': len(gliders), 'class': best.glider_class.value if best else '-',
+        'gliders': len(gliders), 'class': best.label if best else '-',
         'life': best.lifetime_periods if best else float('nan'),
         'ongoing': ('yes' if best.ongoing else 'no') if best else '-',
         'r_bl': best.r_mean / width if best else float('nan'),
         'travel_w': best.distance / width if best else float('nan'),
+        'rate': best.travel_w_per_100 if best else float('nan'),
         'travels': 'yes' if moving else 'no', 'halts': len(run.halts) if windows is not None else '-',
         'trouble': run.trouble or '-', 'wall_s': wall,
     }
@@ -78,9 +79,10 @@ def feedback_row(scene: DemoScene, seed: int, periods: float, windows: dict[str,
 
 
 GLIDER_COLUMNS = (('seed', 'seed', 'd'), ('start', 'start r [BL] / theta / phi [deg]', ''),
-                  ('gliders', 'gliders', 'd'), ('class', 'class', ''), ('life', 'lifetime [periods]', '.0f'),
+                  ('gliders', 'bound pairs', 'd'), ('class', 'what', ''), ('life', 'lifetime [periods]', '.0f'),
                   ('ongoing', 'bound at the end', ''), ('r_bl', 'r [BL]', '.2f'), ('travel_w', 'travel [W]', '.2f'),
-                  ('travels', f'travels (>= {TRAVEL_MIN_W:g} W)', ''), ('halts', 'halts', ''),
+                  ('rate', 'W per 100 periods', '.1f'),
+                  ('travels', f'travels (>= {TRAVEL_MIN_W_PER_100:g} W per 100 periods)', ''), ('halts', 'halts', ''),
                   ('trouble', 'trouble', ''),
                   ('wall_s', 'wall [s]', '.1f'))
 FEEDBACK_COLUMNS = (('seed', 'seed', 'd'), ('halts', 'halts', 'd'), ('per_robot', 'robot 0 / 1', ''),
@@ -124,17 +126,17 @@ def main(argv: list[str] | None = None) -> int:
         for seed in args.seeds:
             rows.append(glider_row(scene, seed, periods, shared_windows() if args.gliders_feedback else None,
                                    args.clock_noise))
-            print(f'[gliders seed {seed}] {rows[-1]["gliders"]} glider(s), travels: {rows[-1]["travels"]}',
+            print(f'[gliders seed {seed}] {rows[-1]["gliders"]} bound pair(s), a glider: {rows[-1]["travels"]}',
                   file=sys.stderr, flush=True)
         hits = sum(r['travels'] == 'yes' for r in rows)
         control = ('with the impact controller' if args.gliders_feedback else 'open loop') + \
             (', clock noise' if args.clock_noise else '')
         print(f'\n## {scene.key}: {scene.title}\n{scene.preset} robots, start {scene.start}, jitter +-{scene.jitter}, '
-              f'{periods:g} periods, {control}; glider = bound >= {MIN_PERIODS} periods, '
-              f'travels = net >= {TRAVEL_MIN_W:g} W '
-              '(the longest-travelling glider of each seed)\n')
+              f'{periods:g} periods, {control}; bound pair = bound >= {MIN_PERIODS} periods, glider = a bound pair '
+              f'whose centre travels (net) >= {TRAVEL_MIN_W_PER_100:g} W per 100 periods '
+              '(the longest-travelling bound pair of each seed)\n')
         print(markdown_table(rows, GLIDER_COLUMNS))
-        print(f'\n**{hits} of {len(rows)} seeds** have a glider that travels >= {TRAVEL_MIN_W:g} W')
+        print(f'\n**{hits} of {len(rows)} seeds** have a glider (>= {TRAVEL_MIN_W_PER_100:g} W per 100 periods)')
         print(f'CSV: {write_csv(out_path("demo_seeds_gliders.csv"), rows)}')
     if 'feedback' in wanted:
         scene = FEEDBACK

@@ -9,7 +9,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from smarticle_bringup.demo_scenes import FEEDBACK, GLIDERS, MIN_PERIODS, TRAVEL_MIN_W, analyse, run_batch, travelling
+from smarticle_bringup.demo_scenes import (FEEDBACK, GLIDERS, MIN_PERIODS, TRAVEL_MIN_W_PER_100, analyse, run_batch,
+                                           travelling)
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))   # the repository root: tests.* helpers
@@ -98,10 +99,10 @@ def test_demo_feedback_part_open_loop_as_separate_processes(tmp_path: Path) -> N
 
 @pytest.mark.slow
 def test_the_default_seed_glides_and_travels() -> None:
-    """The demo's default seed, its gliders scene in the batch core: a glider that travels by the demo's rule."""
+    """The demo's default seed, its gliders scene in the batch core: a bound pair that travels, a glider."""
     run = run_batch(GLIDERS, 1)
     gliders = analyse(GLIDERS, run.times, run.poses).gliders
-    assert not run.trouble and any(travelling(g, GLIDERS.spec.body_length) for g in gliders), gliders
+    assert not run.trouble and any(travelling(g) and g.label == 'C1 glider' for g in gliders), gliders
 
 
 def test_the_gliders_scene_starts_where_p5_starts_its_pairs() -> None:
@@ -130,9 +131,13 @@ def test_the_sim_bridge_builds_the_scene_the_batch_path_runs(scene: object) -> N
 
 
 def test_demo_rule_is_the_documented_one() -> None:
-    """The rule the seed table was run with: bound >= 30 periods under 1.6 BL, travelling >= 0.5 W."""
-    assert (MIN_PERIODS, TRAVEL_MIN_W) == (30, 0.5)
+    """The demo's words are the glider analysis's: bound >= 30 periods under 1.6 BL, travelling >= 1 W per 100."""
+    from smarticle_tracking.gliders import GliderConfig
+
+    assert (MIN_PERIODS, TRAVEL_MIN_W_PER_100) == (30, 1.0)
     config = GLIDERS.glider_config()
+    assert (config.min_periods, config.travel_min_w_per_100) == (GliderConfig().min_periods,
+                                                                 GliderConfig().travel_min_w_per_100)
     assert config.r_bind == pytest.approx(1.6 * GLIDERS.spec.body_length)
     assert FEEDBACK.glider_config().width == FEEDBACK.spec.body_length
 
@@ -146,10 +151,15 @@ def test_glider_lines_show_class_lifetime_and_travel() -> None:
     gliders = analyse_gliders(times, poses, config).gliders
     text = glider_lines(gliders, config.width)
     header, row = text.splitlines()
-    assert 'class' in header and 'lifetime [periods]' in header and 'travel [W]' in header
+    assert 'what' in header and 'lifetime [periods]' in header and 'travel [W]' in header
+    assert 'travels (>= 1 W per 100 periods)' in header
     cells = row.split()
-    assert cells[:4] == ['0-1', 'C1', '0', '35'] and cells[-1] == 'yes'
-    assert float(cells[-2]) == pytest.approx(gliders[0].distance / config.width, abs=0.01)
+    assert cells[:6] == ['0-1', 'C1', 'glider', '180', '0', '35'] and cells[-1] == 'yes'
+    assert float(cells[-3]) == pytest.approx(gliders[0].distance / config.width, abs=0.01)
+    assert float(cells[-2]) == pytest.approx(gliders[0].travel_w_per_100, abs=0.05)
+    still = analyse_gliders(*synthetic_pair([True] * 35 + [False] * 5, phi=math.pi), config).gliders
+    cells = glider_lines(still, config.width).splitlines()[1].split()
+    assert cells[1:4] == ['C1', 'bound', 'pair'] and cells[-1] == 'no'     # a still pair is no glider
     assert glider_lines((), 0.054) == '  none'
 
 
@@ -164,13 +174,20 @@ def test_animation_draws_three_links_per_robot_and_the_halts(tmp_path: Path) -> 
     times, poses = synthetic_pair([True] * 4, n_robots=2)
     arms = np.zeros((len(times), 2, 2))
     halts = [(1.0, 0, 'arm1_front')]
-    parts = [AnimatedPart('1 gliders', GLIDERS.spec, times, poses, arms, [GliderSpan(0, 1, 'C1', 0.0, 6.4, 0.1)]),
+    span = GliderSpan(0, 1, 'C1', 0.0, 6.4, 0.1, ('bound', 'C1 bound pair', 'C1 glider', 'C1 glider'))
+    assert [span.label_at(t) for t in (0.0, 1.5, 1.6, 3.3, 5.0, 6.4)] == [None, None, 'bound', 'C1 bound pair',
+                                                                         'C1 glider', None]
+    parts = [AnimatedPart('1 gliders', GLIDERS.spec, times, poses, arms, [span]),
              AnimatedPart('2 feedback', GLIDERS.spec, times, poses, arms, (), halts)]
     path = write_animation(parts, tmp_path / 'a.gif', step=0.4)
     with Image.open(path) as gif:
         frames = gif.n_frames
         gif.seek(0)
         first = np.asarray(gif.convert('RGB'))
+        gif.seek(4)                 # part 1, t = 1.6 s: bound one period, not yet a bound pair: no class colour
+        one_period = np.asarray(gif.convert('RGB'))
+        gif.seek(8)                 # part 1, t = 3.2 s: the run so far is a C1 bound pair
+        labelled = np.asarray(gif.convert('RGB'))
         gif.seek(frames // 2 + 1)   # part 2, t = 0.4 s: before the halt
         before = np.asarray(gif.convert('RGB'))
         gif.seek(frames // 2 + 3)   # part 2, t = 1.2 s: robot 0 holds after its halt at 1.0 s
@@ -178,9 +195,11 @@ def test_animation_draws_three_links_per_robot_and_the_halts(tmp_path: Path) -> 
         gif.seek(frames // 2 + 5)   # part 2, t = 2.0 s: its next period began, it moves again
         resumed = np.asarray(gif.convert('RGB'))
     assert frames == 2 * 16
-    blue = np.all(np.abs(first.astype(int) - (0x2a, 0x8c, 0xff)) < 30, axis=-1)    # the C1 glider's colour
+    def blues(image: np.ndarray) -> int:    # the C1 class colour
+        return int(np.all(np.abs(image.astype(int) - (0x2a, 0x8c, 0xff)) < 30, axis=-1).sum())
+
     red = np.all(np.abs(halted.astype(int) - (0xd6, 0x27, 0x28)) < 30, axis=-1)    # a halted robot's outline
-    assert blue.sum() > 100 and red.sum() > 20
+    assert blues(first) == 0 and blues(one_period) == 0 and blues(labelled) > 100 and red.sum() > 20
 
     def reds(image: np.ndarray) -> int:
         return int(np.all(np.abs(image.astype(int) - (0xd6, 0x27, 0x28)) < 30, axis=-1).sum())

@@ -10,7 +10,7 @@ from tests.helpers.glider_scenes import FRAMES_PER_PERIOD, PERIOD, pair_scene, p
 
 from smarticle_tracking.errors import GliderConfigError, GliderInputError
 from smarticle_tracking.glider_monitor import GliderMonitor
-from smarticle_tracking.gliders import GliderClass, GliderConfig, analyse_gliders
+from smarticle_tracking.gliders import GliderClass, GliderConfig, PairKind, analyse_gliders, running_labels
 
 
 def jostling_robots(seed: int, n_frames: int = 2500, n_robots: int = 5) -> tuple[np.ndarray, np.ndarray]:
@@ -46,7 +46,7 @@ def test_streaming_finds_the_same_gliders_as_batch(seed: int) -> None:
     times, poses = jostling_robots(seed)
     rng = np.random.default_rng(100 + seed)
     contacts = rng.random((times.size, 10)) < 0.01
-    cfg = GliderConfig(min_periods=5, r_bind=0.09)
+    cfg = GliderConfig(min_periods=5, r_bind=0.09, travel_min_w_per_100=10.0)   # random walkers: both kinds
     batch = analyse_gliders(times, poses, cfg, contacts=contacts)
     monitor = GliderMonitor(cfg, history=10_000)
     stream(monitor, times, poses, contacts)
@@ -59,12 +59,14 @@ def test_streaming_finds_the_same_gliders_as_batch(seed: int) -> None:
         assert b.glider_class is g.glider_class
         assert b.start_time == pytest.approx(g.start_time)
         assert b.age == pytest.approx(g.lifetime)
-        assert b.is_glider
+        assert b.is_bound_pair and (b.kind, b.is_glider) == (g.kind, g.is_glider)
+        assert b.travel_w_per_100 == pytest.approx(g.travel_w_per_100, abs=1e-9, nan_ok=True)
         assert b.phi_mean == pytest.approx(g.phi_mean, abs=1e-9)
         assert b.distance == pytest.approx(g.distance, abs=1e-12)
         assert b.isolation == pytest.approx(g.isolation, abs=1e-12)
         assert b.isolated is g.isolated
     assert len({round(g.isolation, 6) for g in batch.gliders}) > 1   # jostling robots crowd some periods
+    assert {g.kind for g in batch.gliders} == {PairKind.GLIDER, PairKind.BOUND_PAIR}
 
 
 def test_bound_set_after_each_period_matches_the_batch_table() -> None:
@@ -96,14 +98,33 @@ def test_live_report_of_a_c1_glider() -> None:
     seen = stream(monitor, times, poses)
     at = 35 * FRAMES_PER_PERIOD + 4                            # mid period 35, run started at 2
     (b,) = seen[at]
-    assert (b.i, b.j, b.start_period, b.age_periods, b.is_glider) == (0, 1, 2, 34, True)
+    assert (b.i, b.j, b.start_period, b.age_periods, b.is_bound_pair) == (0, 1, 2, 34, True)
+    assert (b.kind, b.is_glider, b.label) == (PairKind.BOUND_PAIR, False, 'C1 bound pair')   # it does not move
     assert b.glider_class is GliderClass.C1
     assert (b.r, b.theta, b.phi) == (pytest.approx(0.08), pytest.approx(math.radians(80)),
                                      pytest.approx(math.radians(185)))
-    assert seen[5 * FRAMES_PER_PERIOD][0].is_glider is False
+    early = seen[5 * FRAMES_PER_PERIOD][0]
+    assert (early.is_bound_pair, early.is_glider, early.label) == (False, False, 'bound')
     assert seen[-1] == ()
     (done,) = monitor.finish()
     assert (done.age_periods, done.r) == (40, pytest.approx(0.08))    # r as of the run, not after
+
+
+def test_the_live_label_is_the_batch_label_of_the_run_so_far() -> None:
+    """Each period the monitor says what the run so far is: 'bound', then 'C2 bound pair', then 'C2 glider'."""
+    times, poses = pair_scene(periods(70, 3, 60), phi=math.radians(10))
+    moving = times >= 45 * PERIOD
+    poses[moving, :2, 1] += 0.008 * (times[moving] - 45 * PERIOD)[:, None]
+    cfg = GliderConfig(min_periods=30)
+    analysis = analyse_gliders(times, poses, cfg)
+    (g,) = analysis.gliders
+    expected = running_labels(analysis, g)
+    seen = stream(GliderMonitor(cfg), times, poses)
+    live = [seen[(g.start_period + n) * FRAMES_PER_PERIOD + FRAMES_PER_PERIOD - 1][0].label
+            for n in range(g.lifetime_periods)]                  # at the last frame of each bound period
+    assert live == list(expected)
+    assert live[0] == 'bound' and live[29] == 'C2 bound pair' and live[-1] == 'C2 glider' == g.label
+    assert 'C2 glider' not in live[:44]
 
 
 def test_memory_is_bounded_by_history() -> None:

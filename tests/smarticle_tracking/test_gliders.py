@@ -12,9 +12,9 @@ from tests.helpers.glider_scenes import FRAMES_PER_PERIOD, PERIOD, R_BOUND, R_FR
 
 from smarticle_tracking.errors import GliderConfigError, GliderInputError
 from smarticle_tracking.glider_plots import draw_pair_coordinates, plot_glider_analysis
-from smarticle_tracking.gliders import (GliderClass, GliderConfig, analyse_gliders, bound_runs,
+from smarticle_tracking.gliders import (GliderClass, GliderConfig, PairKind, analyse_gliders, bound_runs,
                                         classify_configuration, ensemble_msd, format_glider_table,
-                                        glider_table)
+                                        glider_summary, glider_table, running_labels)
 
 
 def config(k: int, **kw: object) -> GliderConfig:
@@ -94,6 +94,59 @@ def test_classify_configuration_tolerance() -> None:
     assert classify_configuration(math.radians(140), math.radians(45)) is GliderClass.C1
     assert classify_configuration(math.radians(130), math.radians(45)) is GliderClass.UNCLASSIFIED
     assert classify_configuration(math.nan) is GliderClass.UNCLASSIFIED
+
+
+@pytest.mark.parametrize(('phi_deg', 'expected'), [
+    (135.5, GliderClass.C1), (148.0, GliderClass.C1), (224.5, GliderClass.C1),   # C1: 135 to 225 deg
+    (134.5, GliderClass.UNCLASSIFIED), (225.5, GliderClass.UNCLASSIFIED),
+    (315.5, GliderClass.C2), (0.0, GliderClass.C2), (44.5, GliderClass.C2),      # C2: 315 to 45 deg
+    (45.5, GliderClass.UNCLASSIFIED), (314.5, GliderClass.UNCLASSIFIED), (90.0, GliderClass.UNCLASSIFIED),
+])
+def test_the_default_phi_bands(phi_deg: float, expected: GliderClass) -> None:
+    """C1 is a mean phi of 135-225 deg (the demo's glider, mean phi 148 deg, is C1), C2 315-45 deg."""
+    assert classify_configuration(math.radians(phi_deg)) is expected
+    assert classify_configuration(math.radians(phi_deg), GliderConfig().class_tolerance) is expected
+
+
+def test_a_still_bound_pair_is_not_a_glider_and_a_travelling_one_is() -> None:
+    """A glider is a bound pair whose centre of mass travels >= 1 W per 100 periods of its run."""
+    still = analyse_gliders(*pair_scene(periods(40, 0, 40), velocity=(0.0, 0.0)), config(30))
+    (g,) = still.gliders
+    assert (g.kind, g.is_glider, g.label) == (PairKind.BOUND_PAIR, False, 'C1 bound pair')
+    assert g.travel_w_per_100 == pytest.approx(0.0)
+    # 1.1 and 0.9 W per 100 periods over 40 samples (39 periods between the first and the last)
+    for rate, kind in ((1.1, PairKind.GLIDER), (0.9, PairKind.BOUND_PAIR)):
+        speed = rate / 100.0 * 0.054 * 40 / (39 * PERIOD)
+        (g,) = analyse_gliders(*pair_scene(periods(40, 0, 40), velocity=(speed, 0.0)), config(30)).gliders
+        assert g.travel_w_per_100 == pytest.approx(rate)
+        assert g.kind is kind
+    (g,) = analyse_gliders(*pair_scene(periods(40, 0, 40), velocity=(0.001, 0.0)),
+                           config(30, travel_min_w_per_100=50.0)).gliders
+    assert not g.is_glider                                      # the rate is a setting
+
+
+def test_running_labels_appear_only_once_their_definition_is_met() -> None:
+    # bound from period 0 for 60 periods, still for the first 40 periods, then moving fast
+    times, poses = pair_scene(periods(60, 0, 60), phi=math.radians(180))
+    moving = times >= 40 * PERIOD
+    poses[moving, :2, 0] += 0.01 * (times[moving] - 40 * PERIOD)[:, None]
+    analysis = analyse_gliders(times, poses, config(30))
+    (g,) = analysis.gliders
+    labels = running_labels(analysis, g)
+    assert len(labels) == 60
+    assert set(labels[:29]) == {'bound'}                       # fewer than K = 30 periods: no class, no glider
+    assert set(labels[29:41]) == {'C1 bound pair'}             # K periods, still
+    first = labels.index('C1 glider')
+    assert 41 <= first < 60 and set(labels[first:]) == {'C1 glider'}
+    assert labels[-1] == g.label                               # the whole run's words
+
+
+def test_the_summary_line_counts_bound_pairs_and_gliders() -> None:
+    still = analyse_gliders(*pair_scene(periods(40, 0, 40)), config(30)).gliders
+    assert glider_summary(still) == '1 bound pair, no glider'
+    moving = analyse_gliders(*pair_scene(periods(40, 0, 40), velocity=(0.002, 0.0)), config(30)).gliders
+    assert glider_summary(moving) == '1 bound pair, 1 of them a glider (0-1 C1)'
+    assert glider_summary(()) == 'no bound pair, no glider'
 
 
 def test_theta_and_r_of_the_glider() -> None:
@@ -219,8 +272,12 @@ def test_summary_table_lists_every_glider() -> None:
     text = format_glider_table(rows)
     lines = text.splitlines()
     assert 'dist [W]' in lines[0] and 'V_com [mm/s]' in lines[0] and 'beta' in lines[0]
+    assert 'travels' in lines[0] and 'W / 100 T' in lines[0] and 'kind' in lines[0]
     assert len(lines) == 4 and ' C2 ' in lines[2] and ' C1 ' in lines[3]
-    assert format_glider_table([]) == 'no gliders found'
+    # 0.001 m/s: 39 x 1.6 mm in 40 periods = 2.9 W per 100 periods, a glider; 99 x 1.6 mm in 100: 2.96
+    assert [(r['kind'], r['travels']) for r in rows] == [('glider', True), ('glider', True)]
+    assert rows[0]['travel_w_per_100'] == pytest.approx(100 * 0.001 * 39 * PERIOD / 0.054 / 40)
+    assert format_glider_table([]) == 'no bound pairs, so no gliders'
     ens = ensemble_msd(gliders, max_lag=5)
     assert np.all(np.isfinite(ens.msd))
 

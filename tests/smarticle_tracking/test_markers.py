@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 from smarticle_tracking.glider_monitor import GliderMonitor
 from smarticle_tracking.gliders import GliderClass, GliderConfig
-from smarticle_tracking.markers import CLASS_COLOURS, ROBOT_COLOUR, RobotDims, render_png, robot_outline, scene_markers
+from smarticle_tracking.markers import (BOUND_COLOUR, CLASS_COLOURS, ROBOT_COLOUR, RobotDims, render_png, robot_outline,
+                                       scene_markers)
 from smarticle_tracking.parameters import (MONITOR_PARAMS, TRACKER_PARAMS,
                                          SettingsError, monitor_settings, parse_tag_ids, tracker_config)
 
@@ -60,9 +61,20 @@ def test_scene_markers_show_robots_and_a_bond_coloured_by_class() -> None:
     bonds = [s for s in shapes if s.ns == 'gliders']
     assert len(bonds) == 1 and bonds[0].points == (tuple(frame[0, :2]), tuple(frame[1, :2]))
     label = next(s for s in shapes if s.ns == 'glider_labels')
-    assert label.text.startswith('C1 0-1') and '5 T' in label.text
+    assert label.text.startswith('C1 bound pair 0-1') and '5 T' in label.text   # still: a bound pair, no glider
     unbound = scene_markers(frame, ())
     assert all(s.rgba == ROBOT_COLOUR for s in unbound if s.ns == 'robots')
+
+
+def test_a_pair_bound_fewer_than_k_periods_has_no_class_label_or_colour() -> None:
+    times, poses = pair_scene(periods(6, 1, 5), phi=math.pi)
+    monitor = GliderMonitor(GliderConfig(min_periods=30))
+    for t, frame in zip(times, poses, strict=True):
+        bound = monitor.update(t, frame)
+    shapes = scene_markers(poses[-1], bound)
+    label = next(s for s in shapes if s.ns == 'glider_labels')
+    assert label.text.startswith('bound 0-1') and 'C1' not in label.text
+    assert {s.rgba for s in shapes if s.ns in ('robots', 'gliders') and s.id in (0, 1)} == {BOUND_COLOUR}
 
 
 def test_render_png_writes_a_picture(tmp_path: Path) -> None:

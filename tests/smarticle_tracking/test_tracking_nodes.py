@@ -75,7 +75,7 @@ def test_glider_monitor_reports_a_constructed_glider(nodes, ros_node) -> None:  
     pub = node.create_publisher(PoseArray, topics.topic('poses'), topics.qos_profile(topics.Qos.SENSOR))
     assert spin_until(node, lambda: pub.get_subscription_count() >= 1 and
                       node.count_publishers(topics.topic('gliders')) >= 1, 20.0), nodes.output(monitor)
-    times, poses = pair_scene(periods(6, 1, 5), phi=math.radians(175.0))
+    times, poses = pair_scene(periods(6, 1, 5), phi=math.radians(175.0), velocity=(0.002, 0.0))   # 5 W / 100 T
     poses[:, 2] = np.nan                              # robot 2 is never seen
     for t, frame in zip(times, poses, strict=True):
         pub.publish(_pose_array(frame, float(t)))
@@ -87,9 +87,14 @@ def test_glider_monitor_reports_a_constructed_glider(nodes, ros_node) -> None:  
         pub.publish(_pose_array(poses[-1], float(times[-1])))
     last = next(r for r in reversed(reports) if _stamp_ns(r.header) == last_ns)
     assert len(reports) >= len(times) // 2, nodes.output(monitor)
-    assert [s.name for s in last.status] == ['glider 0-1']
+    assert [s.name for s in last.status] == ['pair 0-1']
     values = {kv.key: kv.value for kv in last.status[0].values}
     assert values['class'] == 'C1' and values['age_periods'] == '5' and values['is_glider'] == 'true'
+    assert (values['label'], values['travels']) == ('C1 glider', 'true')
+    assert float(values['travel_w']) == pytest.approx(0.002 * 4 * 1.6 / 0.054, abs=1e-3)
+    assert last.status[0].message.startswith('C1 glider, bound 5 periods')
+    early = next(r for r in reports if r.status)      # the first bound period: not yet a bound pair
+    assert {kv.key: kv.value for kv in early.status[0].values}['label'] == 'bound'
     assert float(values['r']) == pytest.approx(0.08, abs=1e-6)
     assert float(values['phi_deg']) == pytest.approx(175.0, abs=0.1)
     assert all(not r.status for r in reports if _stamp_ns(r.header) < 1.6e9)   # period 0 is unbound
@@ -195,7 +200,7 @@ def test_sim_camera_tracker_and_monitor_find_the_glider(nodes, ros_node, tmp_pat
     checked = [r for r in reports if _stamp_ns(r.header) in truth]
     assert len(checked) >= 5
     for report in checked:
-        assert [s.name for s in report.status] == ['glider 0-1']
+        assert [s.name for s in report.status] == ['pair 0-1']
         values = {kv.key: kv.value for kv in report.status[0].values}
         gt = truth[_stamp_ns(report.header)]
         r_true = math.hypot(*(gt[1, :2] - gt[0, :2]))

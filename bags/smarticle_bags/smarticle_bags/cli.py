@@ -119,7 +119,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--topic', default='/smarticles/poses', help='PoseArray topic with the robot poses')
     p.add_argument('--period', type=float, default=GAIT_PERIOD, help=f'gait period (s) (default {GAIT_PERIOD:g})')
     p.add_argument('--min-periods', type=int, default=30,
-                   help='bound this many periods makes a glider (default 30, as in the paper)')
+                   help='bound this many periods in a row makes a bound pair (default 30, as in the paper)')
+    p.add_argument('--travel-min', type=float, default=1.0, metavar='W_PER_100',
+                   help='a bound pair whose centre of mass travels (net) at least this many W per 100 periods '
+                        'of its run is a glider (default 1)')
     p.add_argument('--plot', default=None, metavar='FILE.png',
                    help='also write a figure of the gliders to this PNG (without it, nothing is written)')
     p = sub.add_parser('check', help='verify every chunk CRC and record of a bag; list damaged chunks',
@@ -186,16 +189,20 @@ def _analyze(ns: argparse.Namespace) -> int:
         print(f'{PROG} analyze: {ns.topic} has {len(poses.stamp)} message(s) in {ns.bag}; nothing to analyse',
               file=sys.stderr)
         return 2
-    config = GliderConfig(period=ns.period, min_periods=ns.min_periods)
+    try:
+        config = GliderConfig(period=ns.period, min_periods=ns.min_periods, travel_min_w_per_100=ns.travel_min)
+    except ValueError as err:   # --period, --min-periods or --travel-min out of range
+        print(f'{PROG} analyze: {err}', file=sys.stderr)
+        return 2
     figure = Path(ns.plot) if ns.plot else None   # reading a bag writes nothing unless asked
     report = glider_report(poses.stamp - poses.stamp[0], poses.xyh, config, figure)
     print(f'{ns.bag}: {poses.xyh.shape[1]} robots, {len(poses.stamp)} pose messages over '
-          f'{poses.stamp[-1] - poses.stamp[0]:.1f} s; gliders bound >= {ns.min_periods} periods:')
+          f'{poses.stamp[-1] - poses.stamp[0]:.1f} s: {report.summary}\n({report.rule})')
     print(report.table)
     if report.figure is not None:
         print(f'wrote {report.figure}')
     elif figure is not None:
-        print(f'no figure written to {figure}: no glider formed')
+        print(f'no figure written to {figure}: no bound pair formed')
     return 0
 
 
