@@ -5,8 +5,8 @@ its stamp is the shared start time on their clocks: seconds since 1970 on a boar
 simulation. A zero stamp (the default) means "now", each node's own clock when the message arrives;
 ``--in 2`` stamps this machine's wall clock plus 2 s (boards on one clock, e.g. NTP, then start their
 periods together); ``--at T`` stamps T. The command waits until the nodes listen (``--wait`` matching
-subscriptions, within ``--timeout`` seconds), publishes, waits until they have the message, then stays a
-second for nodes still being discovered. The same as ``ros2 topic pub --once /smarticles/start
+subscriptions, within ``--timeout`` seconds, then until no new one has come for a second), publishes, waits
+until they have the message, then stays a second for nodes still being discovered. The same as ``ros2 topic pub --once /smarticles/start
 std_msgs/msg/Header "{}" --qos-durability transient_local``.
 """
 
@@ -27,8 +27,9 @@ STAMP_MAX = 2**31 - 1
 KEEP_ALIVE = 1.0
 #: What the ROS graph calls a node it has not named yet.
 UNKNOWN = '_UNKNOWN_'
-#: Seconds to wait, once ``--wait`` subscriptions matched, for the rest of the graph's subscriptions.
-SETTLE = 0.5
+#: Once ``--wait`` subscriptions matched: the start goes out when no new one has come for SETTLE seconds, at
+#: the latest SETTLE_MAX seconds after.
+SETTLE, SETTLE_MAX = 1.0, 5.0
 
 
 def _seconds(text: str, low: float, high: float, what: str) -> float:
@@ -120,8 +121,13 @@ def publish_start(args: argparse.Namespace, ros_args: list[str]) -> int:
                       'ROS_DOMAIN_ID?)', file=sys.stderr)
                 return 1
             rclpy.spin_once(node, timeout_sec=0.05)
-        settle = time.monotonic() + SETTLE       # nodes started together are discovered within moments
-        while time.monotonic() < settle:
+        # nodes started together are discovered one by one: publish once no new listener has come for SETTLE s
+        seen, changed = (-1, -1), time.monotonic()
+        latest = changed + SETTLE_MAX
+        while time.monotonic() < min(changed + SETTLE, latest):
+            now = (publisher.get_subscription_count(), node.count_subscribers(topic))
+            if now != seen:
+                seen, changed = now, time.monotonic()
             rclpy.spin_once(node, timeout_sec=0.05)
         msg = header()
         stamp = start_stamp(args.delay, args.at, time.time())
