@@ -552,7 +552,7 @@ class _Reader:
                 remaps.append((source, target))
             elif 'from' in child.attrib:
                 path = Path(self.attr(scope, child, 'from') or '')
-                path = path if path.is_absolute() else scope.path.parent / path
+                path = path.absolute()  # a relative path is the caller's, from the working folder, as ros2 launch
                 if not path.is_file():
                     raise self.fail(scope, child, f'parameter file {path} does not exist')
                 try:

@@ -202,7 +202,7 @@ BAD = {
     'runaway include': ('<launch>\n<include file="$(dirname)/bad.launch.xml"/>\n</launch>', 2,
                         'includes nest deeper than'),
     'malformed parameter file': ('<launch>\n<node pkg="smarticle_driver" exec="gait">\n'
-                                 '  <param from="malformed.yaml"/>\n</node>\n</launch>', 3,
+                                 '  <param from="$(dirname)/malformed.yaml"/>\n</node>\n</launch>', 3,
                                  'malformed.yaml:4: malformed YAML in the parameter file'),
     'bad argument value': ('<launch>\n<arg name="robots" default="two"/>\n<arg name="robot" default="0"/>\n'
                            "<let name='more' value=\"$(eval '$(var robot) + 1 &lt; $(var robots)')\"/>\n</launch>",
@@ -223,6 +223,24 @@ def test_bad_input_is_one_line_naming_file_and_line(case: str, tmp_path: Path) -
     text = str(err.value)
     assert '\n' not in text and message in text, text
     assert text.startswith(f'{path}:{line}:'), text
+
+
+def test_a_relative_parameter_file_is_the_callers_from_the_working_folder(tmp_path: Path,
+                                                                         monkeypatch: pytest.MonkeyPatch) -> None:
+    """As ``ros2 launch``: ``params_file:=mine.yaml`` names a file in the folder the launch was started from."""
+    (tmp_path / 'launch').mkdir()
+    (tmp_path / 'work').mkdir()
+    launch = tmp_path / 'launch' / 'one.launch.xml'
+    launch.write_text('<launch>\n<arg name="params_file"/>\n<node pkg="smarticle_driver" exec="gait">\n'
+                      '  <param from="$(var params_file)"/>\n</node>\n</launch>\n')
+    (tmp_path / 'work' / 'mine.yaml').write_text('/**:\n  ros__parameters:\n    period: 1.6\n')
+    monkeypatch.chdir(tmp_path / 'work')
+    plan = resolve(launch, {'params_file': 'mine.yaml'})
+    files = [p for p in plan.nodes[0].params if isinstance(p, ParamFile)]
+    assert files == [ParamFile(str(tmp_path / 'work' / 'mine.yaml'))]
+    monkeypatch.chdir(tmp_path / 'launch')
+    with pytest.raises(LaunchFileError, match=f'parameter file {tmp_path}/launch/mine.yaml does not exist'):
+        resolve(launch, {'params_file': 'mine.yaml'})
 
 
 def test_an_unknown_argument_is_refused_naming_the_declared_ones() -> None:
