@@ -41,7 +41,7 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec('preset', 'small', f'robot preset: {", ".join(sorted(PRESETS))}'),
     ParamSpec('scene', 'dense', f'scene kind: {", ".join(SCENE_KINDS)}'),
     ParamSpec('robots', 7, 'number of robots (dense and random scenes)', 1, 200),
-    ParamSpec('seed', 1, 'seed of the scene builder'),
+    ParamSpec('seed', 1, 'seed of the scene builder (a whole number >= 0)', 0),
     ParamSpec('alpha_max_deg', 90.0, "amplitude of the robots' start shape in degrees: use the gait "
               "nodes' alpha_max_deg", ALPHA_MAX_RANGE_DEG[0], ALPHA_MAX_RANGE_DEG[1]),
     ParamSpec('period', GAIT_PERIOD, "gait period of the start shape (s): use the gait nodes' period", 0.05, 60.0),

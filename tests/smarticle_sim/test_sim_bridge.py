@@ -24,6 +24,7 @@ ROOT = Path(__file__).resolve().parents[2]
     ({'preset': 'huge'}, 'preset'),
     ({'time_step': 0.0}, 'time_step'),
     ({'robots': 0}, 'robots'),
+    ({'seed': -1}, 'seed'),
 ])
 def test_invalid_settings_name_the_field(changes: dict[str, object], field: str) -> None:
     with pytest.raises(ValueError, match=field):
