@@ -3,16 +3,23 @@
 Every number carries its 95 % interval (``stats``); each paper-against-sim row says whether the paper's
 value lies inside the sim's interval. Trials that ended in SimTrouble are excluded from the statistics
 (their runs stop early) but counted and listed; failed trials (the trial raised, or the engine lost it)
-are counted and listed with the last line of their traceback. Sections (the spec's ``report`` list):
+are counted and listed with the last line of their traceback.
 
-* ``p1`` fraction of trials with a pair bound >= ``positive_periods`` (and its isolated variant), and
-  the distance those gliders travel (W);
+Words, as the glider analysis defines them (``smarticle_tracking.gliders``, docs/gliders.md): a stored
+``GliderRecord`` is a **bound pair** (bound >= K = ``min_periods`` periods in a row); it is a **glider** only
+if its stored net travel is at least ``TRAVEL_MIN_W_PER_100`` W per 100 periods of its run (``pair_kind``);
+C1 / C2 are the bands of its mean phi. Every section that counts bound pairs counts the gliders among them
+too; the P6 kind stores a pair's travel only with ``details``, and without it the section says so. Sections
+(the spec's ``report`` list):
+
+* ``p1`` fraction of trials with a pair bound >= ``positive_periods`` (and its isolated variant, and the
+  isolated variant that is a glider), and the distance those pairs travel (W);
 * ``trajectories`` body-centre paths of one trial (Fig. 1c);
-* ``configurations`` r and phi histograms of the gliders, C1 / C2 shares (Fig. 3c, P2);
+* ``configurations`` r and phi histograms of the bound pairs, C1 / C2 shares, of the gliders too (Fig. 3c, P2);
 * ``lifetimes`` lifetime against phi, semi-log lifetime histogram, Kaplan-Meier per class (P3);
 * ``basin`` bound-at-end map over (theta, phi) for each phase of robot 2 (Fig. 4a, P4);
 * ``alpha_sweep`` ensemble MSD, beta, V_com and r against alpha_max (Fig. 6, P5);
-* ``p6`` C2 lifetimes open loop against feedback, Kaplan-Meier (Fig. 5d);
+* ``p6`` C2 pairs' bound runs open loop against feedback, Kaplan-Meier (Fig. 5d);
 * ``drift`` single-robot drift per cycle (P7);
 * ``accuracy`` run time against error of the physics settings.
 """
@@ -23,12 +30,15 @@ import math
 from collections import defaultdict
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import Any, TypeVar
 
 import numpy as np
+from smarticle_common.facts import R_BIND_BL
 from smarticle_sim.mujoco_engine import MujocoSettings
 from smarticle_sim.settings import BULLET_SOLVER_RESIDUAL_THRESHOLD
+from smarticle_tracking.gliders import MIN_PERIODS, GliderConfig, PairKind, pair_kind, rule_text, travel_rate
 
 from .errors import ResultError
 from .results import (AccuracyResult, DenseResult, GliderRecord, InadmissiblePairResult, P6Result,
@@ -72,6 +82,11 @@ class Context:
     folder: Path
     figures: list[Path] = field(default_factory=list)
     comparisons: list[Comparison] = field(default_factory=list)
+
+    @cached_property
+    def rule(self) -> GliderConfig:
+        """The glider analysis's definitions with the spec's K and bind distance (``glider_rule``)."""
+        return glider_rule(self.spec)
 
     def ok(self) -> list[tuple[Trial, TrialResult | dict[str, Any]]]:
         """Finished trials that did not end in trouble, with their typed results (``results.read_result``)."""
@@ -138,8 +153,8 @@ def _paper(ctx: Context, name: str, default: Any = None) -> Any:
     return ctx.spec.paper.get(name, default)
 
 
-def _gliders(pairs: Sequence[tuple[Trial, DenseResult]]) -> list[GliderRecord]:
-    """Every glider of the given trials."""
+def _bound_pairs(pairs: Sequence[tuple[Trial, DenseResult]]) -> list[GliderRecord]:
+    """Every bound pair (stored glider record) of the given trials."""
     return [g for _, res in pairs for g in res.gliders]
 
 
@@ -149,59 +164,112 @@ def _num(value: float | None) -> float:
 
 
 def _longest(res: DenseResult | InadmissiblePairResult) -> GliderRecord | None:
-    """A trial's longest glider (the first of equal lifetimes), or None."""
+    """A trial's longest bound pair (the first of equal lifetimes), or None."""
     return max(res.gliders, key=lambda g: g.lifetime_periods, default=None)
+
+
+def glider_rule(spec: ExperimentSpec) -> GliderConfig:
+    """The glider analysis's definitions (``smarticle_tracking.gliders``) with the spec's K (``min_periods``)
+    and bind distance, in the stored records' unit: lengths in W, so body length and width are 1."""
+    return GliderConfig(min_periods=int(spec.base.get('min_periods', MIN_PERIODS)),
+                        r_bind=float(spec.base.get('r_bind_bl', R_BIND_BL)), body_length=1.0, width=1.0,
+                        isolation_distance=float(spec.base.get('isolation_w', 2.0)))
+
+
+def travel_per_100(g: GliderRecord) -> float:
+    """A stored bound pair's net travel in W per 100 periods of its run (NaN when not stored)."""
+    return travel_rate(_num(g.distance_w), g.lifetime_periods, 1.0)
+
+
+def is_glider(g: GliderRecord, rule: GliderConfig) -> bool:
+    """True when a stored bound pair is a glider: its net travel meets the glider rule (``pair_kind``)."""
+    return pair_kind(g.lifetime_periods, _num(g.distance_w), rule) is PairKind.GLIDER
+
+
+def gliders_among(pairs: Sequence[GliderRecord], rule: GliderConfig) -> int:
+    """How many of some stored bound pairs are gliders."""
+    return sum(is_glider(g, rule) for g in pairs)
+
+
+def words_line(rule: GliderConfig) -> str:
+    """The definitions a report's glider counts use, once at its top."""
+    return (f'Words (the glider analysis, docs/gliders.md): {rule_text(rule)}. A count of bound pairs includes the '
+            'gliders among them.')
+
+
+def pairs_count(pairs: Sequence[GliderRecord], rule: GliderConfig) -> str:
+    """'663 bound pairs (>= 30 periods), 12 of them gliders (>= 1 W per 100 periods)': both numbers."""
+    n, moving = len(pairs), gliders_among(pairs, rule)
+    return (f'{n} bound pair{"" if n == 1 else "s"} (>= {rule.min_periods} periods), {moving} of them '
+            f'glider{"" if moving == 1 else "s"} (>= {rule.travel_min_w_per_100:g} W per 100 periods)')
 
 
 # ------------------------------------------------------------------ sections
 
 
 def section_p1(ctx: Context) -> list[str]:
-    """P1: trials with a pair bound >= positive_periods, the isolated variant, and their travel."""
+    """P1: trials with a pair bound >= positive_periods, the isolated variant, the isolated variant that is a
+    glider (the paper's claim), and the travel of those pairs."""
     pairs = ctx.ok_as('p1', DenseResult)
+    rule = ctx.rule
     n = len(pairs)
     positive = sum(bool(r.positive) for _, r in pairs)
     isolated = sum(bool(r.positive_isolated) for _, r in pairs)
     limit = ctx.spec.base.get('positive_periods', 100)
     iso_w = ctx.spec.base.get('isolation_w', 2.0)
-    frac, frac_iso = wilson(positive, n), wilson(isolated, n)
+    gliding = sum(any(g.lifetime_periods >= limit and g.isolated and is_glider(g, rule) for g in r.gliders)
+                  for _, r in pairs)
+    frac, frac_iso, frac_glide = wilson(positive, n), wilson(isolated, n), wilson(gliding, n)
     distances = [max((g for g in r.gliders if g.lifetime_periods >= limit),
                      key=lambda g: g.lifetime_periods).distance_w for _, r in pairs if r.positive]
     dist = bootstrap_mean([_num(d) for d in distances])
     p_frac, p_dist = _paper(ctx, 'fraction_bound', 0.64), _paper(ctx, 'distance_w', 2.9)
+    rate = rule.travel_min_w_per_100
     ctx.comparisons += [
         Comparison(f'P1 trials with an isolated pair bound >= {limit} periods (no third robot within {iso_w:g} W '
                    'in >= 90 % of its periods)', f'{p_frac:.0%} (97/151)', frac_iso,
-                   f'{frac_iso.text(".1%", 1)} ({isolated}/{n})', frac_iso.contains(p_frac)),
+                   f'{frac_iso.text(".1%", 1)} ({isolated}/{n})', frac_iso.contains(p_frac),
+                   'bound pairs, travel not checked'),
+        Comparison(f'P1 trials with an isolated glider bound >= {limit} periods (the pair also travels >= {rate:g} W '
+                   'per 100 periods)', f'{p_frac:.0%} (97/151)', frac_glide,
+                   f'{frac_glide.text(".1%", 1)} ({gliding}/{n})', frac_glide.contains(p_frac),
+                   'the glider rule'),
         Comparison('P1 same, any bound pair (clusters and trains included)', f'{p_frac:.0%}', frac,
                    f'{frac.text(".1%", 1)} ({positive}/{n})', frac.contains(p_frac)),
-        Comparison('P1 distance travelled by those gliders (W)', f'{p_dist} +- 0.2', dist, dist.text('.2f'),
-                   dist.contains(p_dist), 'longest glider >= the limit in each positive trial'),
+        Comparison(f'P1 distance travelled by the longest pair bound >= {limit} periods (W)',
+                   f'{p_dist} +- 0.2 (its gliders)', dist, dist.text('.2f'), dist.contains(p_dist),
+                   'the longest bound pair >= the limit in each positive trial, glider or not'),
     ]
     fig = figure(6, 4)
     ax = fig.add_subplot(1, 1, 1)
     ax.scatter([r.longest_periods for _, r in pairs], [r.longest_distance_w or 0.0 for _, r in pairs], s=12)
     ax.axvline(limit, color='k', ls=':', lw=0.8)
-    ax.set_xlabel('longest glider lifetime (periods)')
+    reach = max([limit, *(r.longest_periods for _, r in pairs)])
+    ax.plot([0, reach], [0.0, rate * reach / 100.0], color='tab:red', ls='--', lw=0.8,
+            label=f'glider rule ({rate:g} W per 100 periods): gliders above')
+    ax.set_xlabel('longest bound pair\'s lifetime (periods)')
     ax.set_ylabel('its distance travelled (W)')
-    ax.set_title(f'P1: {positive}/{n} trials with a pair bound >= {limit} periods', fontsize=9)
+    ax.set_title(f'P1: {positive}/{n} trials with a pair bound >= {limit} periods, {gliding} with an isolated glider',
+                 fontsize=9)
+    legend(ax, 7)
     ctx.save(fig, 'p1_longest')
-    return [f'Positive trial: a glider (glider analysis, K = {ctx.spec.base.get("min_periods")} periods, '
-            f'bound = r under {ctx.spec.base.get("r_bind_bl")} BL in any frame of a period) bound for >= {limit} '
-            f'periods. Isolated: in >= 90 % of its periods no third robot\'s centre within {iso_w:g} W of either '
-            'robot.', '', '![P1](p1_longest.png)', '', *long_gliders_table(pairs, limit),
-            *end_groups_table(pairs, iso_w)]
+    return [f'Positive trial: a pair bound for >= {limit} periods (a bound pair of the glider analysis, K = '
+            f'{rule.min_periods} periods, bound = r under {rule.r_bind:g} BL in any frame of a period), glider or '
+            f'not; the glider row asks the pair to travel >= {rate:g} W per 100 periods of its run too. Isolated: in '
+            f'>= 90 % of its periods no third robot\'s centre within {iso_w:g} W of either robot. '
+            f'{pairs_count(_bound_pairs(pairs), rule)} in {n} trials.', '', '![P1](p1_longest.png)', '',
+            *long_pairs_table(pairs, limit, rule), *end_groups_table(pairs, iso_w)]
 
 
-#: A descriptive cut of the long gliders' table: net displacement of at least this many W per 100 periods (the
+#: A descriptive cut of the long pairs' table: net displacement of at least this many W per 100 periods (the
 #: paper's gliders: 2.9 W in >= 100 periods; P5's free pair at 90 deg about 3-4 W per 100 periods). Not the glider
 #: rule (``smarticle_tracking.gliders.TRAVEL_MIN_W_PER_100``, 1 W per 100 periods): a faster share of the pairs.
 FAST_W_PER_100 = 2.0
 
 
-def long_gliders_table(pairs: Sequence[tuple[Trial, DenseResult]], limit: int) -> list[str]:
-    """What the gliders bound >= ``limit`` periods are: by class and by isolation, their mean r and their net
-    travel per 100 periods (median and quartiles), and how many travel >= ``FAST_W_PER_100``."""
+def long_pairs_table(pairs: Sequence[tuple[Trial, DenseResult]], limit: int, rule: GliderConfig) -> list[str]:
+    """What the pairs bound >= ``limit`` periods are: by class and by isolation, how many are gliders, their mean
+    r and their net travel per 100 periods (median and quartiles), and how many travel >= ``FAST_W_PER_100``."""
     long = [g for _, r in pairs for g in r.gliders if g.lifetime_periods >= limit]
     if not long:
         return []
@@ -213,16 +281,18 @@ def long_gliders_table(pairs: Sequence[tuple[Trial, DenseResult]], limit: int) -
         q1, q2, q3 = np.percentile(values, [25, 50, 75])
         return f'{q2:.2f} [{q1:.2f}, {q3:.2f}]'
 
-    lines = [f'Gliders bound >= {limit} periods, what they are (r: the glider\'s mean centre distance; travel: its net '
-             'displacement per 100 periods of its life; median [quartiles]):', '',
-             f'| gliders | n | r (BL) | travel (W per 100 periods) | faster than {FAST_W_PER_100:g} W per 100 '
-             'periods |', '| --- | ---: | --- | --- | ---: |']
+    lines = [f'Pairs bound >= {limit} periods, what they are (gliders: those travelling >= '
+             f'{rule.travel_min_w_per_100:g} W per 100 periods of their run; r: the pair\'s mean centre distance; '
+             'travel: its net displacement per 100 periods of its run; median [quartiles]):', '',
+             f'| bound pairs | n | gliders | r (BL) | travel (W per 100 periods) | faster than {FAST_W_PER_100:g} W '
+             'per 100 periods |', '| --- | ---: | ---: | --- | --- | ---: |']
     for name, gs in groups:
         if not gs:
             continue
-        travel = [100.0 * _num(g.distance_w) / g.lifetime_periods for g in gs]
+        travel = [travel_per_100(g) for g in gs]
         fast = sum(t >= FAST_W_PER_100 for t in travel)
-        lines.append(f'| {name} | {len(gs)} | {quartiles([_num(g.r_bl) for g in gs])} | {quartiles(travel)} | {fast} |')
+        lines.append(f'| {name} | {len(gs)} | {gliders_among(gs, rule)} | '
+                     f'{quartiles([_num(g.r_bl) for g in gs])} | {quartiles(travel)} | {fast} |')
     return [*lines, '']
 
 
@@ -281,27 +351,41 @@ def section_trajectories(ctx: Context) -> list[str]:
     ax.set_aspect('equal')
     ax.set_xlabel('x (BL)')
     ax.set_ylabel('y (BL)')
-    ax.set_title(f'seed {trial.seed}: one sample per period (o start; bold: longest glider)', fontsize=9)
+    ax.set_title(f'seed {trial.seed}: one sample per period (o start; bold: the longest bound pair)', fontsize=9)
     legend(ax, 7)
     ctx.save(fig, 'trajectories')
     return [f'Trajectories of seed {trial.seed} (Fig. 1c):', '', '![trajectories](trajectories.png)']
 
 
 def section_configurations(ctx: Context) -> list[str]:
-    """Fig. 3c / P2: r and phi histograms of the gliders; C1 and C2 shares."""
+    """Fig. 3c / P2: r and phi histograms of the bound pairs; C1 and C2 shares of the bound pairs and of the
+    gliders among them."""
     pairs = ctx.ok_as('configurations', DenseResult)
-    gl = [g for g in _gliders(pairs) if g.r_bl is not None and g.phi_deg is not None]
+    rule = ctx.rule
+    gl = [g for g in _bound_pairs(pairs) if g.r_bl is not None and g.phi_deg is not None]
+    moving = [g for g in gl if is_glider(g, rule)]
     n = len(gl)
     c1, c2 = sum(g.glider_class == 'C1' for g in gl), sum(g.glider_class == 'C2' for g in gl)
     e1, e2 = wilson(c1, n), wilson(c2, n)
     both = n > 0 and e1.low > 0 and e2.low > 0
+    m1, m2 = sum(g.glider_class == 'C1' for g in moving), sum(g.glider_class == 'C2' for g in moving)
+    g1, g2 = wilson(m1, len(moving)), wilson(m2, len(moving))
+    both_moving = bool(moving) and g1.low > 0 and g2.low > 0
+    tol = math.degrees(rule.class_tolerance)
+    band1, band2 = f'mean phi {180 - tol:.0f}-{180 + tol:.0f} deg', f'mean phi {360 - tol:.0f}-{tol:.0f} deg'
     ctx.comparisons += [
-        Comparison('P2 share of gliders in C1 (phi near 180 deg)', 'one of two modes', e1,
-                   f'{e1.text(".1%", 1)} ({c1}/{n})', None, 'qualitative'),
-        Comparison('P2 share of gliders in C2 (phi near 0/360 deg)', 'one of two modes', e2,
-                   f'{e2.text(".1%", 1)} ({c2}/{n})', None, 'qualitative'),
-        Comparison('P2 both modes present', 'yes', None, 'yes' if both else 'no', both,
+        Comparison(f'P2 share of bound pairs in C1 ({band1})', 'one of two modes', e1,
+                   f'{e1.text(".1%", 1)} ({c1}/{n})', None, 'qualitative; bound pairs, travel not checked'),
+        Comparison(f'P2 share of bound pairs in C2 ({band2})', 'one of two modes', e2,
+                   f'{e2.text(".1%", 1)} ({c2}/{n})', None, 'qualitative; bound pairs, travel not checked'),
+        Comparison('P2 both modes present among the bound pairs', 'yes', None, 'yes' if both else 'no', both,
                    'inside = both Wilson lower bounds > 0'),
+        Comparison(f'P2 both modes present among the gliders (bound pairs travelling >= '
+                   f'{rule.travel_min_w_per_100:g} W per 100 periods)', 'yes', None,
+                   f'{g1.text(".1%", 1)} C1 ({m1}), {g2.text(".1%", 1)} C2 ({m2}) of {len(moving)} '
+                   f'glider{"" if len(moving) == 1 else "s"}'
+                   if moving else 'no glider among them',
+                   both_moving, 'inside = both Wilson lower bounds > 0'),
     ]
     fig = figure(10, 4)
     ax1, ax2 = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
@@ -312,32 +396,36 @@ def section_configurations(ctx: Context) -> list[str]:
     ax1.set_xlabel('r (BL)')
     ax2.set_xlabel('phi (deg)')
     for ax in (ax1, ax2):
-        ax.set_ylabel('gliders')
+        ax.set_ylabel('bound pairs')
         legend(ax, 7)
-    fig.suptitle(f'{n} gliders from {len(pairs)} trials (mean r, circular mean phi per glider)', fontsize=9)
+    fig.suptitle(f'{n} bound pairs ({len(moving)} of them gliders) from {len(pairs)} trials (mean r, circular mean '
+                 'phi per pair)', fontsize=9)
     ctx.save(fig, 'configurations')
-    return ['![r and phi histograms](configurations.png)']
+    return [f'{pairs_count(gl, rule)} in {len(pairs)} trials; C1: {band1}, C2: {band2}.', '',
+            '![r and phi histograms](configurations.png)']
 
 
 def section_lifetimes(ctx: Context) -> list[str]:
-    """P3: lifetime against phi, semi-log lifetime histogram, Kaplan-Meier per class."""
+    """P3: the bound pairs' lifetime against phi, semi-log lifetime histogram, Kaplan-Meier per class."""
     pairs = ctx.ok_as('lifetimes', DenseResult)
-    gl = _gliders(pairs)
+    rule = ctx.rule
+    gl = _bound_pairs(pairs)
     periods = float(ctx.spec.base.get('periods', 300))
-    lines = ['| class | gliders | still bound at the end | KM median lifetime (periods) [95 %] |',
-             '| --- | ---: | ---: | --- |']
+    lines = ['| class | bound pairs | of them gliders | still bound at the end | KM median lifetime (periods) [95 %] |',
+             '| --- | ---: | ---: | ---: | --- |']
     fig = figure(12, 4)
     ax1, ax2, ax3 = (fig.add_subplot(1, 3, k) for k in (1, 2, 3))
     for cls, colour in (('C1', 'tab:red'), ('C2', 'tab:blue'), ('unclassified', 'tab:gray')):
         sel = [g for g in gl if g.glider_class == cls]
         if not sel:
-            lines.append(f'| {cls} | 0 | - | - |')
+            lines.append(f'| {cls} | 0 | 0 | - | - |')
             continue
         life = [g.lifetime_periods for g in sel]
         cens = [bool(g.ongoing) for g in sel]
         km = kaplan_meier(life, cens)
         end = wilson(sum(cens), len(sel))
-        lines.append(f'| {cls} | {len(sel)} | {end.text(".0%", 1)} | {km.median.text(".0f")} |')
+        lines.append(f'| {cls} | {len(sel)} | {gliders_among(sel, rule)} | {end.text(".0%", 1)} | '
+                     f'{km.median.text(".0f")} |')
         ax1.scatter([g.phi_deg for g in sel], life, s=10, color=colour, label=cls)
         ax2.hist(life, bins=np.linspace(0, periods, 31), alpha=0.6, color=colour, label=cls)
         ax3.step(np.r_[0, km.times], np.r_[1, km.survival], where='post', color=colour, label=cls)
@@ -346,40 +434,62 @@ def section_lifetimes(ctx: Context) -> list[str]:
         if cls == 'C2':
             lo, hi = _paper(ctx, 'c2_lifetime_range', [60, 100])
             overlap = km.median.low <= hi and km.median.high >= lo
-            ctx.comparisons.append(Comparison('P3 C2 median lifetime (periods, Kaplan-Meier)', f'~{lo}-{hi}',
-                                              km.median, km.median.text('.0f'), bool(overlap),
-                                              'inside = paper range overlaps the interval'))
+            ctx.comparisons.append(Comparison('P3 C2 bound pairs\' median lifetime (periods, Kaplan-Meier)',
+                                              f'~{lo}-{hi}', km.median, km.median.text('.0f'), bool(overlap),
+                                              'inside = paper range overlaps the interval; bound pairs, travel not '
+                                              'checked'))
         if cls == 'C1':
-            ctx.comparisons.append(Comparison('P3 C1 gliders still bound at the end of the trial', 'many', end,
+            ctx.comparisons.append(Comparison('P3 C1 bound pairs still bound at the end of the trial', 'many', end,
                                               f'{end.text(".0%", 1)} ({sum(cens)}/{len(sel)})',
                                               bool(end.low > 0), 'inside = Wilson lower bound > 0'))
     ax1.set_xlabel('phi (deg)')
     ax1.set_ylabel('lifetime (periods)')
     ax2.set_yscale('log')
     ax2.set_xlabel('lifetime (periods)')
-    ax2.set_ylabel('gliders (log)')
+    ax2.set_ylabel('bound pairs (log)')
     ax3.set_xlabel('lifetime (periods)')
     ax3.set_ylabel('survival (Kaplan-Meier, 95 % band)')
     for ax in (ax1, ax2, ax3):
         legend(ax, 7)
     ctx.save(fig, 'lifetimes')
-    return ['Lifetimes of gliders still bound at the end of a trial are right-censored (Kaplan-Meier).', '',
+    return [f'Lifetimes of the bound pairs, gliders or not ({pairs_count(gl, rule)}); those still bound at the end '
+            'of a trial are right-censored (Kaplan-Meier).', '',
             *lines, '', '![lifetimes](lifetimes.png)']
 
 
 #: Outcome of a P4 start -> its colour in the basin maps (pink bound, blue repelled, as in the paper's Fig. 4a).
 BASIN_COLOURS = {'bound': 'tab:pink', 'repelled': 'tab:blue', 'neither': 'lightgrey', 'inadmissible': 'k'}
 
-#: The classes of P4 starts the basin table counts (theta on a quadrant boundary counts in neither quadrant pair;
-#: "antiparallel" / "parallel" exactly phi = 180 / 0, the bands 90 <= phi <= 270 against the rest).
+#: How the basin section words the quadrant rule of ``theta_quadrants``.
+QUADRANT_RULE = ('theta 0 counts in quadrants 1, 4 and theta 180 in 2, 3 (each lies between two quadrants of its '
+                 'pair); theta 90 and 270, the line between the pairs, count in neither')
+
+
+def theta_quadrants(theta_deg: float) -> str | None:
+    """The pair of quadrants a P4 start's theta (deg, any turn) lies in: '1, 4' in front of robot 1
+    (-90 < theta < 90), '2, 3' behind it (90 < theta < 270), None on the line between (theta 90 or 270)."""
+    theta = float(theta_deg) % 360.0
+    if theta in (90.0, 270.0):
+        return None
+    return '1, 4' if theta < 90.0 or theta > 270.0 else '2, 3'
+
+
+def antiparallel_band(phi_deg: float) -> bool:
+    """True when a P4 start's phi (deg, any turn) is in the antiparallel band 90 <= phi <= 270."""
+    return 90.0 <= float(phi_deg) % 360.0 <= 270.0
+
+
+#: The classes of P4 starts the basin table, its Fisher tests and its paper-against-sim rows count (quadrants:
+#: ``theta_quadrants``; "antiparallel" / "parallel" exactly phi = 180 / 0, the bands 90 <= phi <= 270 against the
+#: rest).
 BASIN_CLASSES: tuple[tuple[str, Callable[[float, float], bool]], ...] = (
     ('all admissible', lambda theta, phi: True),
-    ('theta in quadrants 1, 4', lambda theta, phi: 0.0 < theta < 90.0 or 270.0 < theta < 360.0),
-    ('theta in quadrants 2, 3', lambda theta, phi: 90.0 < theta < 180.0 or 180.0 < theta < 270.0),
+    ('theta in quadrants 1, 4', lambda theta, phi: theta_quadrants(theta) == '1, 4'),
+    ('theta in quadrants 2, 3', lambda theta, phi: theta_quadrants(theta) == '2, 3'),
     ('antiparallel normals (phi 180)', lambda theta, phi: phi == 180.0),
     ('parallel normals (phi 0)', lambda theta, phi: phi == 0.0),
-    ('antiparallel band (90 <= phi <= 270)', lambda theta, phi: 90.0 <= phi <= 270.0),
-    ('parallel band (phi < 90 or > 270)', lambda theta, phi: phi < 90.0 or phi > 270.0),
+    ('antiparallel band (90 <= phi <= 270)', lambda theta, phi: antiparallel_band(phi)),
+    ('parallel band (phi < 90 or > 270)', lambda theta, phi: not antiparallel_band(phi)),
 )
 
 
@@ -431,20 +541,17 @@ def section_basin(ctx: Context) -> list[str]:
     def angles(t: Trial) -> tuple[float, float]:
         return float(t.params['theta_deg']) % 360.0, float(t.params['phi_deg']) % 360.0
 
-    def q14(t: Trial) -> bool:
-        theta = float(t.params['theta_deg']) % 360.0
-        return theta < 90.0 or theta > 270.0
-
-    share = wilson(sum(q14(t) for t, _ in bound), len(bound))
-    anti = wilson(sum(90.0 <= float(t.params['phi_deg']) % 360.0 <= 270.0 for t, _ in bound), len(bound))
+    classes = dict(BASIN_CLASSES)
+    in_front = sum(classes['theta in quadrants 1, 4'](*angles(t)) for t, _ in bound)
+    share = wilson(in_front, len(bound))
+    anti = wilson(sum(classes['antiparallel band (90 <= phi <= 270)'](*angles(t)) for t, _ in bound), len(bound))
     ctx.comparisons += [
         Comparison('P4 bound starts with theta in quadrants 1 and 4', 'mostly (> 50 %)', share,
-                   f'{share.text(".0%", 1)} ({sum(q14(t) for t, _ in bound)}/{len(bound)})',
+                   f'{share.text(".0%", 1)} ({in_front}/{len(bound)})',
                    bool(share.n and share.low > 0.5), 'inside = Wilson lower bound > 50 %'),
         Comparison('P4 bound starts with antiparallel normals (90 <= phi <= 270 deg)', 'mostly (> 50 %)', anti,
                    f'{anti.text(".0%", 1)}', bool(anti.n and anti.low > 0.5), 'inside = Wilson lower bound > 50 %'),
     ]
-    classes = dict(BASIN_CLASSES)
 
     def outcomes(name: str, of_phase: float | None = None) -> list[str]:
         """The outcomes of the admissible starts of class ``name`` (of one phase, or of all)."""
@@ -481,8 +588,7 @@ def section_basin(ctx: Context) -> list[str]:
             f'(within reach, not colliding every period). By the earlier rule (r < r_bind or contact in each of '
             f'the last {tail} periods) {earlier} were bound.', '',
             'Bound, repelled and neither starts of each class out of its admissible ones (95 % Wilson interval); '
-            'theta on a quadrant '
-            'boundary counts in neither quadrant pair:', '', *table, '',
+            f'{QUADRANT_RULE}:', '', *table, '',
             'Bound shares compared by Fisher\'s exact test (two-sided), quadrants 1, 4 against 2, 3 and the '
             'antiparallel band against the parallel band: ' + '; '.join(tests) + '.', '', '![basin](basin.png)', '',
             '![basin, polar](basin_polar.png)']
@@ -497,9 +603,10 @@ def section_alpha_sweep(ctx: Context) -> list[str]:
         if longest is not None:
             by_alpha[float(t.params['alpha_max_deg'])].append(longest)
     alphas = sorted({float(t.params['alpha_max_deg']) for t, _ in pairs})
-    lines = ['| alpha_max (deg) | bound pairs | beta (ensemble) | beta per pair, mean [95 %] | '
-             'V_com (W/period) [95 %] | r (BL) [95 %] | C2 share [95 %] |',
-             '| ---: | ---: | ---: | --- | --- | --- | --- |']
+    rule = ctx.rule
+    lines = ['| alpha_max (deg) | trials with a bound pair | of them gliders | beta (ensemble) | '
+             'beta per pair, mean [95 %] | V_com (W/period) [95 %] | r (BL) [95 %] | C2 share [95 %] |',
+             '| ---: | ---: | ---: | ---: | --- | --- | --- | --- |']
     fig = figure(13, 4)
     axm, axb, axv, axr = (fig.add_subplot(1, 4, k) for k in (1, 2, 3, 4))
     table: dict[str, list[tuple[float, Estimate]]] = defaultdict(list)
@@ -518,15 +625,18 @@ def section_alpha_sweep(ctx: Context) -> list[str]:
         c2 = wilson(sum(g.glider_class == 'C2' for g in gl), len(gl))
         for name, est in (('beta', beta), ('v', v), ('r', r_est)):
             table[name].append((alpha, est))
-        lines.append(f'| {alpha:g} | {len(gl)}/{total_trials[alpha]} | {beta_ens:.2f} | {beta.text(".2f")} | '
+        lines.append(f'| {alpha:g} | {len(gl)}/{total_trials[alpha]} | {gliders_among(gl, rule)} | {beta_ens:.2f} | '
+                     f'{beta.text(".2f")} | '
                      f'{v.text(".3f")} | {r_est.text(".3f")} | {c2.text(".0%", 1)} |')
         target = _paper(ctx, 'beta', 1.8)
         if alpha in (90.0, 10.0):
             ctx.comparisons.append(Comparison(f'P5 beta at {alpha:g} deg', f'~{target}', beta, beta.text('.2f'),
                                               beta.contains(target), 'bootstrap over pairs'))
         if alpha < 70.0:
-            ctx.comparisons.append(Comparison(f'P5 share of C2 gliders at {alpha:g} deg', '0 (none below 70 deg)',
-                                              c2, c2.text('.0%', 1), c2.contains(0.0) if c2.n else None))
+            ctx.comparisons.append(Comparison(f'P5 share of C2 bound pairs at {alpha:g} deg',
+                                              '0 (no C2 glider below 70 deg)', c2, c2.text('.0%', 1),
+                                              c2.contains(0.0) if c2.n else None,
+                                              'bound pairs, travel not checked (stricter than gliders)'))
     for ax, name, label in ((axb, 'beta', 'beta'), (axv, 'v', 'V_com (W / period)'), (axr, 'r', 'r (BL)')):
         pts = table[name]
         x = [a for a, _ in pts]
@@ -540,8 +650,9 @@ def section_alpha_sweep(ctx: Context) -> list[str]:
     axm.set_ylabel('ensemble MSD (W^2)')
     legend(axm, 6)
     ctx.save(fig, 'alpha_sweep')
-    return ['Per pair: its longest glider. beta per pair = fit of its own path (NaN when too short); '
-            'ensemble beta = fit of the ensemble MSD <x^2> - <x>^2 over all pairs at that amplitude.', '',
+    return ['Per trial: its longest bound pair (bound >= K periods, glider or not; gliders: those of them travelling '
+            f'>= {rule.travel_min_w_per_100:g} W per 100 periods). beta per pair = fit of its own path (NaN when too '
+            'short); ensemble beta = fit of the ensemble MSD <x^2> - <x>^2 over all pairs at that amplitude.', '',
             *lines, '', '![alpha sweep](alpha_sweep.png)']
 
 
@@ -614,9 +725,9 @@ def section_step_convergence(ctx: Context) -> list[str]:
         return f'{rel:+.1%}', abs(rel) <= CONVERGED_WITHIN or abs(est.value - ref.value) <= half
 
     lines = ['| ' + ''.join(f'{k} | ' for k in columns) + 'time step | solver iterations | residual threshold | '
-             'pairs with a glider | glider mean r (BL) [95 %] | off the finest | travel per 100 periods (W) [95 %] | '
-             'off the finest | converged |',
-             '| ' + '---: | ' * len(columns) + '--- | ---: | ---: | ---: | --- | ---: | --- | ---: | --- |']
+             'trials with a bound pair | of them gliders | bound pair\'s mean r (BL) [95 %] | off the finest | travel '
+             'per 100 periods (W) [95 %] | off the finest | converged |',
+             '| ' + '---: | ' * len(columns) + '--- | ---: | ---: | ---: | ---: | --- | ---: | --- | ---: | --- |']
     fig = figure(9, 4)
     axes = [fig.add_subplot(1, 2, panel + 1) for panel in range(2)]
     for variant in variants:
@@ -630,7 +741,8 @@ def section_step_convergence(ctx: Context) -> list[str]:
             lines.append('| ' + setting_cells(variant, columns)
                          + f'1/{1.0 / setting[0]:.0f} s | {setting[1] or "- (MuJoCo)"} | '
                          f'{f"{setting[2]:.0e}" if setting[1] else "-"} | '
-                         f'{len(by_setting.get(key, []))}/{trials_at[key]} | {figures["r"][key].text(".3f")} | '
+                         f'{len(by_setting.get(key, []))}/{trials_at[key]} | '
+                         f'{gliders_among(by_setting.get(key, []), ctx.rule)} | {figures["r"][key].text(".3f")} | '
                          f'{r_off} | {figures["travel"][key].text(".2f")} | {v_off} | '
                          f'{_yes_no(both) if key != finest else "(reference)"} |')
         prefix = ', '.join(f'{k} {v}' for k, v in variant)
@@ -644,13 +756,15 @@ def section_step_convergence(ctx: Context) -> list[str]:
                 label = f'{solver[0]} solver iterations{residual}' if solver[0] else 'MuJoCo'
                 ax.errorbar([1.0 / s[0] for s in same], [e.value for e in ests], yerr=err, fmt='o-', capsize=3,
                             label=f'{prefix}: {label}' if prefix else label)
-    for ax, label in zip(axes, ('glider mean r (BL)', 'travel per 100 periods (W)'), strict=True):
+    for ax, label in zip(axes, ('bound pair\'s mean r (BL)', 'travel per 100 periods (W)'), strict=True):
         legend(ax, 7)
         ax.set_xscale('log', base=2)
         ax.set_xlabel('physics rate (1 / time step, Hz)')
         ax.set_ylabel(label)
     ctx.save(fig, 'step_convergence')
-    return [f'Per pair: its longest glider (mean r over its periods; travel = its V_com x 100 periods). The '
+    return [f'Per trial: its longest bound pair (bound >= K periods, glider or not; mean r over its periods; travel '
+            f'= its V_com x 100 periods; gliders: those travelling >= {ctx.rule.travel_min_w_per_100:g} W net per 100 '
+            'periods of their run). The '
             f'reference is the finest step (with the most solver iterations and the strictest residual threshold '
             f'there){" of each setting" if columns else ""}; converged = within {CONVERGED_WITHIN:.0%} of it or '
             f'within the two values\' combined 95 % half-widths, for both figures. Residual threshold: Bullet\'s '
@@ -659,8 +773,10 @@ def section_step_convergence(ctx: Context) -> list[str]:
 
 
 def section_p6(ctx: Context) -> list[str]:
-    """Fig. 5d / P6: C2 lifetimes open loop against feedback (Kaplan-Meier, censored at the trial's end).
+    """Fig. 5d / P6: C2 pairs' lifetimes open loop against feedback (Kaplan-Meier, censored at the trial's end).
 
+    A lifetime is the pair's bound run from period 0 (K = 1), a bound pair or a glider or neither; with the kind's
+    ``details`` the pair's travel is stored and the gliders are counted (``p6_details_lines``), else it says so.
     A grid over more than amplitude and feedback (e.g. ``noise.clock_rate_sd``) gives one row per setting and
     condition; open loop and feedback are compared (log-rank) within a setting.
     """
@@ -695,7 +811,7 @@ def section_p6(ctx: Context) -> list[str]:
         ax2.step(np.r_[0, km.times], np.r_[1, km.survival], where='post', label=short if setting else label)
     lines += p6_details_lines(order, float(ctx.spec.base.get('periods', 0.0)))
     ax1.set_xticks(range(len(order)), labels, fontsize=7, rotation=20)
-    ax1.set_ylabel('C2 lifetime (periods)')
+    ax1.set_ylabel('C2 pair\'s bound run (periods)')
     ax2.set_xlabel('lifetime (periods)')
     ax2.set_ylabel('survival (Kaplan-Meier)')
     legend(ax2, 7)
@@ -718,11 +834,19 @@ def section_p6(ctx: Context) -> list[str]:
     if fb and ol:
         best_ol = max(ol, key=lambda m: m.high)
         longer = all(m.low > best_ol.high for m in fb)
-        ctx.comparisons.append(Comparison('P6 feedback C2 gliders live longer than open loop', 'much longer',
-                                          None, f'feedback median(s) {", ".join(m.text(".0f") for m in fb)} vs best '
+        ctx.comparisons.append(Comparison('P6 feedback C2 pairs stay bound longer than open loop',
+                                          'much longer (C2 gliders)', None,
+                                          f'feedback median(s) {", ".join(m.text(".0f") for m in fb)} vs best '
                                           f'open loop {best_ol.text(".0f")}', longer,
-                                          'inside = every feedback median interval above the open-loop ones'))
-    return [*lines, '', '![P6 lifetimes](p6_lifetimes.png)']
+                                          'inside = every feedback median interval above the open-loop ones; bound '
+                                          'runs from the start, glider or not'))
+    rows = [r for _, rs in order for r in rs]
+    words = ('Lifetime: the C2 pair\'s bound run from period 0 (bound = r under the bind distance in a period, K = 1), '
+             'glider or not.')
+    if rows and any(r.travel_w is None for r in rows):
+        words += (' Travel is not stored for these trials (run without `details`), so the gliders among the pairs '
+                  'are not counted.')
+    return [words, '', *lines, '', '![P6 lifetimes](p6_lifetimes.png)']
 
 
 def _mean_se(values: Sequence[float]) -> str:
@@ -733,15 +857,20 @@ def _mean_se(values: Sequence[float]) -> str:
 
 
 def p6_details_lines(order: Sequence[tuple[Any, list[P6Result]]], periods: float) -> list[str]:
-    """With the p6 kind's ``details``: each condition's travel while bound (W) and its periods with contact."""
+    """With the p6 kind's ``details``: each condition's travel while bound (W), the gliders among its pairs (bound
+    >= K periods and travelling the glider rate, ``smarticle_tracking.gliders.pair_kind``) and its periods with
+    contact."""
     rows = list(order)
     if not rows or any(r.travel_w is None or r.contact_periods is None for _, rs in rows for r in rs):
         return []
-    out = ['', '| condition | setting | travel while bound (W), mean +- SE | periods with contact, mean +- SE | '
-           'in the second half | final r (BL), median |', '| --- | --- | ---: | ---: | ---: | ---: |']
+    rule = GliderConfig(body_length=1.0, width=1.0)      # travel_w is stored in W
+    out = ['', f'| condition | setting | travel while bound (W), mean +- SE | gliders (bound >= {rule.min_periods} '
+           f'periods, >= {rule.travel_min_w_per_100:g} W per 100 periods) | periods with contact, mean +- SE | '
+           'in the second half | final r (BL), median |', '| --- | --- | ---: | ---: | ---: | ---: | ---: |']
     for (setting, alpha, feedback), rs in rows:
+        moving = sum(pair_kind(r.lifetime_periods, _num(r.travel_w), rule) is PairKind.GLIDER for r in rs)
         out.append(f'| {"feedback" if feedback else "open loop"} {alpha:g} deg | {dict(setting) or "-"} | '
-                   f'{_mean_se([r.travel_w or 0.0 for r in rs])} | '
+                   f'{_mean_se([r.travel_w or 0.0 for r in rs])} | {moving} of {len(rs)} | '
                    f'{_mean_se([len(r.contact_periods or []) for r in rs])} | '
                    f'{_mean_se([sum(q >= periods / 2 for q in r.contact_periods or []) for r in rs])} | '
                    f'{np.median([r.final_r_bl if r.final_r_bl is not None else math.nan for r in rs]):.2f} |')
@@ -826,22 +955,24 @@ def section_accuracy(ctx: Context) -> list[str]:
             *out, '', '![accuracy](accuracy.png)']
 
 
-#: A glider "touches" if its robots touched in at least this share of its bound periods (fixed before the
+#: A bound pair "touches" if its robots touched in at least this share of its bound periods (fixed before the
 #: first run that watched contacts, the spec p1_contacts).
 TOUCHING_SHARE = 0.5
 
 
 def section_contacts(ctx: Context) -> list[str]:
-    """How often gliders touch (dense trials with ``contacts: true``): per class, and P1 with touching gliders."""
+    """How often bound pairs touch (dense trials with ``contacts: true``): per class, and P1 with touching pairs."""
     pairs = ctx.ok_as('contacts', DenseResult)
-    gl = [g for g in _gliders(pairs) if g.contact_fraction is not None]
+    rule = ctx.rule
+    gl = [g for g in _bound_pairs(pairs) if g.contact_fraction is not None]
     if not gl:
-        return ['No glider carries a contact share: run the spec with `params: {contacts: true}`.']
+        return ['No bound pair carries a contact share: run the spec with `params: {contacts: true}`.']
     limit = ctx.spec.base.get('positive_periods', 100)
-    lines = [f'A glider touches if its two robots touched (any physics step) in >= {TOUCHING_SHARE:.0%} of its '
-             'bound periods.', '',
-             '| gliders | n | touching [95 %] | median share of periods with contact | share 0 (never touched) |',
-             '| --- | ---: | --- | ---: | ---: |']
+    lines = [f'A bound pair touches if its two robots touched (any physics step) in >= {TOUCHING_SHARE:.0%} of its '
+             f'bound periods; {pairs_count(gl, rule)}.', '',
+             '| bound pairs | n | of them gliders | touching [95 %] | median share of periods with contact | '
+             'share 0 (never touched) |',
+             '| --- | ---: | ---: | --- | ---: | ---: |']
     fig = figure(6, 4)
     ax = fig.add_subplot(1, 1, 1)
     for cls, colour in (('all', None), ('C1', 'tab:red'), ('C2', 'tab:blue'), ('unclassified', 'tab:gray')):
@@ -850,12 +981,12 @@ def section_contacts(ctx: Context) -> list[str]:
             continue
         share = np.array([g.contact_fraction for g in sel])
         touching = wilson(int((share >= TOUCHING_SHARE).sum()), len(sel))
-        lines.append(f'| {cls} | {len(sel)} | {touching.text(".0%", 1)} | {np.median(share):.2f} | '
-                     f'{(share == 0).mean():.0%} |')
+        lines.append(f'| {cls} | {len(sel)} | {gliders_among(sel, rule)} | {touching.text(".0%", 1)} | '
+                     f'{np.median(share):.2f} | {(share == 0).mean():.0%} |')
         if colour is not None:
             ax.hist(share, bins=np.linspace(0, 1, 21), alpha=0.6, color=colour, label=cls)
-    ax.set_xlabel('share of the glider\'s bound periods with contact')
-    ax.set_ylabel('gliders')
+    ax.set_xlabel('share of the pair\'s bound periods with contact')
+    ax.set_ylabel('bound pairs')
     legend(ax, 7)
     ctx.save(fig, 'contacts')
     n = len(pairs)
@@ -865,7 +996,7 @@ def section_contacts(ctx: Context) -> list[str]:
     iso_touching = sum(any(g.lifetime_periods >= limit and g.isolated
                            and (g.contact_fraction or 0.0) >= TOUCHING_SHARE for g in r.gliders)
                        for _, r in pairs)
-    lines += ['', f'| trials ({n}) with a glider >= {limit} periods | count [95 %] |', '| --- | --- |',
+    lines += ['', f'| trials ({n}) with a pair bound >= {limit} periods | count [95 %] |', '| --- | --- |',
               f'| any | {wilson(positive, n).text(".1%", 1)} ({positive}) |',
               f'| touching | {wilson(touching_pos, n).text(".1%", 1)} ({touching_pos}) |',
               f'| touching and isolated | {wilson(iso_touching, n).text(".1%", 1)} ({iso_touching}) |',
@@ -934,6 +1065,11 @@ SECTIONS: dict[str, Callable[[Context], list[str]]] = {
 }
 
 
+#: The sections that count the bound pairs of the glider analysis (the report states the words once at its top).
+PAIR_SECTIONS = frozenset({'p1', 'trajectories', 'configurations', 'lifetimes', 'alpha_sweep', 'contacts',
+                           'step_convergence'})
+
+
 def _yes_no(value: bool | None) -> str:
     """The 'inside' cell."""
     return 'n/a' if value is None else ('yes' if value else 'no')
@@ -980,12 +1116,12 @@ def margin_lines(ctx: Context) -> list[str]:
 
 def code_line(code: Mapping[str, str]) -> str:
     """The report's line on code: the source tree now (HEAD) and, apart, the code version of its trials (the
-    last commit of the trial code, which is in their keys, and the library versions)."""
+    hash of the trial code's source, which is in their keys, and the library versions)."""
     from .store import head_commit
 
-    libraries = ', '.join(f'{name} {version}' for name, version in code.items() if name != 'commit')
+    libraries = ', '.join(f'{name} {version}' for name, version in code.items() if name != 'source')
     return (f'Code: the source tree now is at HEAD {head_commit()}; the trials\' code version (in their store keys) is '
-            f'the trial code\'s last commit {code.get("commit", "unknown")}, {libraries}.')
+            f'the trial code\'s source hash {code.get("source", "unknown")}, {libraries}.')
 
 
 def write_report(spec: ExperimentSpec, trials: list[Trial], store: ResultStore, code: Mapping[str, str]) -> Path:
@@ -998,10 +1134,11 @@ def write_report(spec: ExperimentSpec, trials: list[Trial], store: ResultStore, 
     for name in spec.report:
         body += [f'## {name}', '', *SECTIONS[name](ctx), '']
     ok = ctx.ok()
+    words = [words_line(ctx.rule), ''] if set(spec.report) & PAIR_SECTIONS else []
     head = [f'# {spec.name}: {spec.description}', '',
             f'Spec `{spec.source or spec.name}`, kind `{spec.kind}`, {len(trials)} trials '
             f'({len(spec.points())} grid points x {len(spec.seeds)} seeds), {spec.base.get("periods", "?")} periods.',
-            '', code_line(code), '',
+            '', code_line(code), '', *words,
             '## Paper against sim', '',
             '| quantity | paper | sim [95 % interval] | interval | n trials / values | seeds | paper inside | note |',
             '| --- | --- | --- | --- | ---: | --- | --- | --- |']

@@ -2,7 +2,7 @@
 
 A kind returns a frozen dataclass derived from ``TrialResult``; the engine stores ``as_dict()`` (the
 JSON record's ``result``) and the report reads it back typed with ``read_result(kind, stored)``, nested
-glider records included (``GliderRecord``). Optional fields (default None) are left out of the stored dict
+bound-pair records included (``GliderRecord``). Optional fields (default None) are left out of the stored dict
 while None, so a kind that gains a field keeps the stored bytes of the trials that do not ask for it; the
 fields are in the stored order, so ``as_dict()`` is the stored dict key for key.
 
@@ -62,7 +62,10 @@ class StoredRecord:
 
 @dataclass(frozen=True)
 class GliderRecord(StoredRecord):
-    """One glider of the glider analysis (``trials.glider_record``): lengths in BL (= W), angles in degrees."""
+    """One bound pair of the glider analysis (``trials.glider_record``; bound >= K periods in a row): lengths in
+    BL (= W), angles in degrees. It is a glider only if ``distance_w`` over ``lifetime_periods`` meets the glider
+    rule (``smarticle_tracking.gliders.pair_kind``; the report counts them). The class name and the field names
+    are the stored ones."""
 
     STORED_NAMES: ClassVar[Mapping[str, str]] = {'glider_class': 'class'}
 
@@ -75,7 +78,7 @@ class GliderRecord(StoredRecord):
     r_bl: float | None              # mean centre distance (None if not finite)
     theta_deg: float | None         # circular mean pair angles
     phi_deg: float | None
-    distance_w: float | None        # net displacement of the pair's centre over its life
+    distance_w: float | None        # net displacement of the pair's centre over its life (the glider rule's travel)
     path_w: float | None            # path length of the pair's centre
     v_com_w_per_period: float | None  # speed of the pair's centre
     beta: float | None              # MSD exponent of its own path (None if it cannot be fitted)
@@ -111,7 +114,7 @@ class SingleResult(TrialResult):
 class P6Result(TrialResult):
     """A C2 pair of the feedback robot (P6), open loop or with impact-halt feedback."""
 
-    lifetime_periods: int           # bound run from period 0 (glider analysis, K = 1)
+    lifetime_periods: int           # bound run from period 0 (glider analysis, K = 1): glider or not
     censored: bool                  # still bound at the end of the trial
     halts: int                      # halts the feedback controllers decided (0 open loop)
     trouble: str
@@ -127,30 +130,31 @@ class P6Result(TrialResult):
 
 @dataclass(frozen=True)
 class C2HarvestResult(TrialResult):
-    """A dense open-loop trial of the feedback robot: every C2 glider's pair coordinates at its period
-    boundaries (``c2_harvest.sample_record`` rows: seed, i, j, period, r_bl, theta_deg, phi_deg, touched and
-    the pair's full state)."""
+    """A dense open-loop trial of the feedback robot: every C2 bound pair's (bound >= K periods, travel not
+    checked) pair coordinates at its period boundaries (``c2_harvest.sample_record`` rows: seed, i, j, period,
+    r_bl, theta_deg, phi_deg, touched and the pair's full state)."""
 
     samples: list[dict[str, Any]]
-    gliders: int                    # C2 gliders that gave samples
+    gliders: int                    # C2 bound pairs that gave samples (stored name)
     trouble: str
 
 
 @dataclass(frozen=True)
 class DenseResult(TrialResult):
-    """Robots densely packed (P1-P3): the gliders of the glider analysis and per-trial figures."""
+    """Robots densely packed (P1-P3): the bound pairs of the glider analysis and per-trial figures (the stored
+    names say "glider" for every bound pair; the report tells the gliders among them by their travel)."""
 
     periods_run: float              # gait periods the trial ran (fewer if it ended in trouble)
     trouble: str
     peak_tilt_deg: float | None     # largest body tilt at the trouble checks (None if not measured)
     peak_overlap_mm: float | None   # deepest contact overlap at the trouble checks
-    n_gliders: int
-    positive: bool                  # a glider of >= positive_periods
+    n_gliders: int                  # bound pairs
+    positive: bool                  # a pair bound >= positive_periods
     positive_isolated: bool         # ... that is isolated (no third robot within isolation_w W)
-    longest_periods: int            # the longest glider's lifetime (0 without a glider)
-    longest_class: str              # its class ('' without a glider)
+    longest_periods: int            # the longest bound pair's lifetime (0 without one)
+    longest_class: str              # its class ('' without one)
     longest_distance_w: float | None
-    #: One record per glider (stored dicts are read into ``GliderRecord``).
+    #: One record per bound pair (stored dicts are read into ``GliderRecord``).
     gliders: list[GliderRecord]
     trajectory_bl: list[Any]        # body centres once per period (BL), [] without ``trajectory``
     trajectory_dt: float            # s between the trajectory's samples (one gait period)
@@ -161,7 +165,7 @@ class DenseResult(TrialResult):
 
 @dataclass(frozen=True)
 class PairResult(DenseResult):
-    """Two robots from pair coordinates (P4, P5): binding at the end, travel, and the pair's gliders."""
+    """Two robots from pair coordinates (P4, P5): binding at the end, travel, and the pair's bound pairs."""
 
     r0_bl: float                    # start after the seeded jitter
     theta0_deg: float
@@ -294,13 +298,14 @@ class StudyDenseResult(TrialResult):
     x_real_time: float              # sim_s / wall_s
     deepest_mm: float               # deepest robot-robot overlap at the samples (mm)
     trouble: str
-    #: For 7 robots that ran more than a period: gliders of >= 30 and >= 100 periods, isolated ones of >= 100.
+    #: For 7 robots that ran more than a period: bound pairs of >= 30 and >= 100 periods, isolated ones of >= 100
+    #: (travel not checked; the names are the study's columns of old).
     gliders_30: int | None = None
     gliders_100: int | None = None
     isolated_100: int | None = None
-    best_dist_W: float | None = None   # longest travel of a glider of >= 100 periods (W)
-    c1_lives: str | None = None     # C1 glider lifetimes (periods), space-separated
-    c2_lives: str | None = None     # C2 glider lifetimes (periods), space-separated
+    best_dist_W: float | None = None   # longest travel of a bound pair of >= 100 periods (W)
+    c1_lives: str | None = None     # C1 bound pairs' lifetimes (periods), space-separated
+    c2_lives: str | None = None     # C2 bound pairs' lifetimes (periods), space-separated
 
 
 @dataclass(frozen=True)

@@ -13,16 +13,19 @@ from smarticle_experiments.store import ResultStore
 CODE = {'smarticle_experiments': '0', 'commit': 'abc', 'numpy': '1', 'pybullet': '1'}
 
 
-def glider(life: int, cls: str, phi: float, ongoing: bool = False, distance: float = 2.9) -> dict[str, Any]:
-    """A glider record as the dense kind returns it."""
+def glider(life: int, cls: str, phi: float, ongoing: bool = False, distance: float = 2.9,
+           isolated: bool = True) -> dict[str, Any]:
+    """A bound pair's record as the dense kind returns it (``GliderRecord``; a glider if ``distance`` W over ``life``
+    periods meets the glider rule)."""
     return {'i': 0, 'j': 1, 'class': cls, 'start_period': 0, 'lifetime_periods': life, 'ongoing': ongoing,
             'r_bl': 1.3 if cls == 'C1' else 1.5, 'theta_deg': 10.0, 'phi_deg': phi, 'distance_w': distance,
-            'path_w': distance, 'v_com_w_per_period': 0.01, 'beta': 1.8, 'isolated': True, 'isolation': 1.0,
-            'com_path_w': [[0.0, 0.0], [0.01, 0.0], [0.02, 0.0]]}
+            'path_w': distance, 'v_com_w_per_period': 0.01, 'beta': 1.8, 'isolated': isolated,
+            'isolation': 1.0 if isolated else 0.0, 'com_path_w': [[0.0, 0.0], [0.01, 0.0], [0.02, 0.0]]}
 
 
 def dense_result(seed: int) -> dict[str, Any]:
-    """A synthetic P1 trial: positive for seeds 0..96 (97 of 151), a C1 and a C2 glider each."""
+    """A synthetic P1 trial: positive for seeds 0..96 (97 of 151), a C1 and a C2 bound pair each (the C2 one and,
+    in odd positive seeds, the C1 one travel the glider rule's 1 W per 100 periods)."""
     positive = seed < 97
     gliders = [glider(300 if positive else 40, 'C1', 180.0, ongoing=positive, distance=2.8 + 0.2 * (seed % 2)),
                glider(60 + seed % 40, 'C2', 5.0)]
@@ -73,15 +76,22 @@ def test_p1_report_puts_the_paper_inside_the_sims_intervals_and_lists_what_it_le
                     'of its periods)']
     assert '(97/151)' in rows['P1 same, any bound pair (clusters and trains included)']
     assert '64.2% [56.3%, 71.4%] (97/151)' in fraction and '| Wilson |' in fraction and '| yes |' in fraction
-    assert '| yes |' in rows['P1 distance travelled by those gliders (W)']
-    assert '| yes |' in rows['P2 both modes present']
-    assert 'Kaplan-Meier' in rows['P3 C2 median lifetime (periods, Kaplan-Meier)']
+    # the paper's claim read with the glider rule: only the odd positive seeds' pairs travel 1 W per 100 periods
+    glide = rows['P1 trials with an isolated glider bound >= 100 periods (the pair also travels >= 1 W per 100 '
+                 'periods)']
+    assert '(48/151)' in glide and '| no |' in glide
+    assert '| yes |' in rows['P1 distance travelled by the longest pair bound >= 100 periods (W)']
+    assert '| yes |' in rows['P2 both modes present among the bound pairs']
+    assert '(102), ' in rows['P2 both modes present among the gliders (bound pairs travelling >= 1 W per 100 periods)']
+    assert 'Kaplan-Meier' in rows["P3 C2 bound pairs' median lifetime (periods, Kaplan-Meier)"]
+    assert '302 bound pairs (>= 30 periods), 253 of them gliders (>= 1 W per 100 periods)' in report
+    assert 'glider: a bound pair whose centre of mass travels >= 1 W per 100 periods' in report
     assert '151 used, 0 ended in sim trouble, 1 failed, 1 not run yet' in report
     assert 'RuntimeError: boom' in report
     assert 'Groups at the end of the run (robots closer than 2 W, single linkage; 151 trials' in report
     assert '| 2 | 151 | 100% [' in report     # the two synthetic robots end 1 W apart: one group of two
     # the 97 positive trials' 300-period C1 gliders (2.8 or 3.0 W); the C2 ones live < 100 periods
-    assert '| C1 | 97 | 1.30 [1.30, 1.30] | 0.93 [0.93, 1.00] | 0 |' in report
+    assert '| C1 | 97 | 48 | 1.30 [1.30, 1.30] | 0.93 [0.93, 1.00] | 0 |' in report
     assert '| all | 97 |' in report and '| in a group |' not in report
     assert ('Trouble margins over 151 trials that ran (at their trouble checks): largest body tilt 2.0 deg '
             '(seed 150; median of the trials\' largest 1.2 deg; the limit is 25 deg), deepest contact overlap '
@@ -156,8 +166,8 @@ def test_the_contacts_section_counts_touching_gliders(tmp_path: Path) -> None:
             g['contact_fraction'] = share
         store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': {}, 'status': 'ok', 'result': result})
     report = write_report(spec, trials, store, CODE).read_text()
-    assert '| all | 8 | 50% [' in report                  # 4 of 8 gliders touch in >= 50 % of their periods
-    assert '| C2 | 4 | 50% [' in report and '| 25% |' in report   # one trial's gliders never touched
+    assert '| all | 8 | 6 | 50% [' in report       # 4 of 8 bound pairs touch in >= 50 % of their periods, 6 glide
+    assert '| C2 | 4 | 4 | 50% [' in report and '| 25% |' in report   # one trial's pairs never touched
     assert '| any | 100.0% [' in report and '| touching | 50.0% [' in report
     assert (store.folder / 'report-touch' / 'contacts.png').stat().st_size > 0
 
@@ -296,6 +306,7 @@ def test_the_p6_report_gives_means_and_a_log_rank_test_of_open_loop_against_feed
     assert 'at 90 deg' in line and 'mean lifetime ratio feedback / open loop 3.44' in line
     p = float(line.split('p = ')[1].split(';')[0])
     assert p < 0.01, line
+    assert 'Travel is not stored for these trials (run without `details`)' in report
 
 
 def test_the_p6_report_gives_one_row_per_grid_setting_and_compares_within_it(tmp_path: Path) -> None:
@@ -354,3 +365,46 @@ def test_step_convergence_reads_a_mujoco_trial_s_own_step(tmp_path: Path) -> Non
     assert [row.split(' | ')[0] for row in rows] == ['| 1/4800 s', '| 1/9600 s']
     assert all(' | - (MuJoCo) | - | ' in row for row in rows)
     assert rows[0].endswith('| no |') and rows[1].endswith('| (reference) |')
+
+
+def test_a_still_bound_pair_and_a_travelling_one_are_one_bound_pair_and_one_glider(tmp_path: Path) -> None:
+    """The report's words are the glider analysis's: a pair bound >= K periods that travels less than 1 W per 100
+    periods is a bound pair, not a glider; P1's paper row asks its isolated pair to be a glider."""
+    spec = spec_from_mapping({'name': 'words', 'kind': 'dense', 'seeds': 1,
+                              'report': ['p1', 'configurations', 'lifetimes']})
+    still = glider(200, 'C1', 180.0, distance=0.2)                          # 0.1 W per 100 periods, isolated
+    travelling = {**glider(150, 'C2', 5.0, distance=3.0, isolated=False), 'i': 2, 'j': 3}   # 2 W per 100 periods
+
+    def result(t: Any) -> dict[str, Any]:
+        return {**dense_result(t.seed), 'positive': True, 'positive_isolated': True, 'longest_periods': 200,
+                'gliders': [still, travelling]}
+
+    report = report_of(spec, tmp_path / 'words', result)
+    assert report.count('2 bound pairs (>= 30 periods), 1 of them glider (>= 1 W per 100 periods)') == 3
+    assert '| all | 2 | 1 | ' in report and '| C1 | 1 | 0 | ' in report and '| C2 | 1 | 1 | ' in report
+    rows = {line.split(' | ')[0].lstrip('| '): line for line in report.splitlines() if line.startswith('| P')}
+    assert '(1/1)' in rows['P1 trials with an isolated pair bound >= 100 periods (no third robot within 2 W in >= 90 % '
+                           'of its periods)']
+    assert '(0/1)' in rows['P1 trials with an isolated glider bound >= 100 periods (the pair also travels >= 1 W '
+                           'per 100 periods)']     # the isolated pair is still, the glider is in a group
+    assert 'C1 (0), ' in rows['P2 both modes present among the gliders (bound pairs travelling >= 1 W per 100 '
+                              'periods)'] and 'C2 (1) of 1 glider |' in report
+
+
+def test_the_p6_report_counts_the_gliders_among_the_pairs_when_their_travel_is_stored(tmp_path: Path) -> None:
+    """With ``details`` a P6 pair stores its travel: a pair bound >= 30 periods that travels 1 W per 100 periods is
+    a glider, one that stays put or breaks before 30 periods is not."""
+    spec = spec_from_mapping({'name': 'p6d', 'description': 'synthetic', 'kind': 'p6', 'periods': 100, 'seeds': 3,
+                              'grid': [{'alpha_max_deg': [90], 'feedback': [False]}], 'report': ['p6']})
+    runs = {0: (100, 1.5), 1: (100, 0.2), 2: (20, 1.0)}     # seed: (bound periods, travel W)
+
+    def result(t: Any) -> dict[str, Any]:
+        life, travel = runs[t.seed]
+        return P6Result(lifetime_periods=life, censored=life == 100, halts=0, trouble='', r0_bl=1.47,
+                        theta0_deg=99.0, phi0_deg=7.0, final_r_bl=1.5, travel_w=travel,
+                        contact_periods=[1, 2]).as_dict()
+
+    report = report_of(spec, tmp_path / 'p6d', result)
+    row = next(x for x in report.splitlines() if x.startswith('| open loop 90 deg | - |'))
+    assert '| 1 of 3 |' in row, row
+    assert 'Travel is not stored' not in report

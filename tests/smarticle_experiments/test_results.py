@@ -127,14 +127,15 @@ def test_a_real_pair_trial_is_stored_and_read_back_unchanged() -> None:
 
 
 def test_a_report_section_reads_typed_records() -> None:
-    from smarticle_experiments.report import basin_outcome, long_gliders_table
+    from smarticle_experiments.report import basin_outcome, glider_rule, long_pairs_table
     from smarticle_experiments.spec import spec_from_mapping
 
-    trial = spec_from_mapping({'name': 'typed', 'kind': 'dense', 'seeds': [0]}).trials({})[0]
+    spec = spec_from_mapping({'name': 'typed', 'kind': 'dense', 'seeds': [0]})
+    trial = spec.trials({})[0]
     dense = read_result('dense', DENSE)
     assert isinstance(dense, DenseResult)
-    table = '\n'.join(long_gliders_table([(trial, dense)], 100))
-    assert '| C2 | 1 | 1.52 [1.52, 1.52] | 2.42 [2.42, 2.42] | 1 |' in table
+    table = '\n'.join(long_pairs_table([(trial, dense)], 100, glider_rule(spec)))
+    assert '| C2 | 1 | 1 | 1.52 [1.52, 1.52] | 2.42 [2.42, 2.42] | 1 |' in table   # 2.42 W per 100 periods: a glider
     assert '| all | 2 |' in table and '| isolated | 2 |' in table
     pair = read_result('pair', PAIR)
     assert isinstance(pair, PairResult) and basin_outcome(pair) == 'bound'
