@@ -3,8 +3,8 @@
 Layout of ``<root>/<store>/`` (default root ``out/experiments``)::
 
     trials/<key>.json     one per finished trial: key, kind, params, seed, status ('ok' or 'failed'),
-                          result or traceback, wall time, worker, code version (package, commit,
-                          pybullet, numpy) -- written atomically (temp file + os.replace)
+                          result or traceback, wall time, worker, code version (package, source hash
+                          of the trial code, pybullet, numpy) -- written atomically (temp file + os.replace)
     summary.parquet       one row per trial of the last run of the store's own spec: key, kind, seed, grid
                           values, status, scalar results (summary-<name>.parquet for another spec that
                           shares the store)
@@ -24,43 +24,26 @@ import math
 import os
 import subprocess
 import tempfile
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
 from . import __version__
 from .errors import StoreError
+from .trial_code import source_hash
 from .trials import code_versions
 
 DEFAULT_ROOT = Path('out/experiments')
-#: Paths (relative to the repository root) whose last commit is the code version of a trial: the code a
-#: trial runs (this package's trial module and the cores it imports), not the engine, report or
-#: statistics, so a change of a figure does not invalidate stored trials.
-CODE_PATHS: tuple[str, ...] = ('smarticle_experiments/smarticle_experiments/trials.py',
-                               'smarticle_experiments/smarticle_experiments/p6.py',
-                               'smarticle_common/smarticle_common', 'smarticle_sim/smarticle_sim',
-                               'smarticle_tracking/smarticle_tracking', 'smarticle_feedback/smarticle_feedback')
-
-
-@lru_cache(maxsize=1)
-def git_commit() -> str:
-    """The last commit touching the trial code (CODE_PATHS), '+dirty' if those paths have local edits."""
-    root = Path(__file__).resolve().parents[2]
-    try:
-        commit = subprocess.run(['git', '-C', str(root), 'log', '-1', '--format=%H', '--', *CODE_PATHS],
-                                capture_output=True, text=True, timeout=20, check=True).stdout.strip()
-        dirty = subprocess.run(['git', '-C', str(root), 'status', '--porcelain', '--untracked-files=no', '--',
-                                *CODE_PATHS], capture_output=True, text=True, timeout=20, check=True).stdout.strip()
-    except (OSError, subprocess.SubprocessError):
-        return 'unknown'
-    return (commit or 'unknown') + ('+dirty' if dirty else '')
+#: The modules whose code the built-in trial kinds run (the trial module imports every kind's code): the
+#: entries of ``trial_code.source_hash`` by default.
+TRIAL_MODULES: tuple[str, ...] = ('smarticle_experiments.trials',)
 
 
 @lru_cache(maxsize=1)
 def head_commit() -> str:
     """The commit of the source tree now (HEAD; '+dirty' if tracked files have local edits), or 'no git' outside
-    a git checkout (an installed package). Not part of a trial's key: that is ``git_commit``, the trial code's."""
+    a git checkout (an installed package). Not part of a trial's key: that is ``code_version``'s source hash."""
     root = Path(__file__).resolve().parents[2]
     try:
         head = subprocess.run(['git', '-C', str(root), 'rev-parse', 'HEAD'], capture_output=True, text=True,
@@ -72,9 +55,11 @@ def head_commit() -> str:
     return (head or 'no git') + ('+dirty' if head and dirty else '')
 
 
-def code_version() -> dict[str, str]:
-    """The code version a trial key includes: package version, commit, pybullet and numpy versions."""
-    return {'smarticle_experiments': __version__, 'commit': git_commit(), **code_versions()}
+def code_version(modules: Iterable[str] = TRIAL_MODULES, path: Sequence[Path] | None = None) -> dict[str, str]:
+    """The code version a trial key includes: the package version, the hash of the source of every project
+    module ``modules`` run (``trial_code.source_hash``, cached per process; ``path``: the folders to find the
+    packages in, default where Python imports them from) and the engines' library versions."""
+    return {'smarticle_experiments': __version__, 'source': source_hash(modules, path), **code_versions()}
 
 
 def json_ready(value: Any) -> Any:

@@ -154,7 +154,7 @@ def test_a_report_over_some_of_the_seeds_sits_beside_the_whole_ones(tmp_path: Pa
 
 
 def test_a_report_names_head_and_the_trials_code_version_apart() -> None:
-    """HEAD is the source tree's commit now; the trials' code version is the trial code's last commit (their key)."""
+    """HEAD is the source tree's commit now; the trials' code version is the trial code's source hash (their key)."""
     import subprocess
 
     from smarticle_experiments.report import code_line
@@ -162,9 +162,9 @@ def test_a_report_names_head_and_the_trials_code_version_apart() -> None:
     root = Path(__file__).resolve().parents[2]
     head = subprocess.run(['git', '-C', str(root), 'rev-parse', 'HEAD'], capture_output=True, text=True,
                           check=True).stdout.strip()
-    line = code_line({'smarticle_experiments': '0.1', 'commit': 'abc', 'numpy': '1', 'pybullet': '2'})
+    line = code_line({'smarticle_experiments': '0.1', 'source': 'abc', 'numpy': '1', 'pybullet': '2'})
     assert f'HEAD {head}' in line, line
-    assert "the trial code's last commit abc, smarticle_experiments 0.1, numpy 1, pybullet 2." in line, line
+    assert "the trial code's source hash abc, smarticle_experiments 0.1, numpy 1, pybullet 2." in line, line
 
 
 def test_report_summary_prints_one_line_per_claim_from_the_store(tmp_path: Path,

@@ -49,9 +49,10 @@ def test_summary_is_parquet_with_scalar_columns_and_no_timing(tmp_path: Path) ->
     assert summary_row(recs[0])['positive'] is True
 
 
-def test_code_version_names_the_package_commit_and_libraries() -> None:
+def test_code_version_names_the_package_source_hash_and_libraries() -> None:
     version = code_version()
-    assert set(version) >= {'smarticle_experiments', 'commit', 'pybullet', 'numpy'}
+    assert set(version) >= {'smarticle_experiments', 'source', 'pybullet', 'numpy'}
+    assert len(version['source']) == 16 and int(version['source'], 16) >= 0
 
 
 def test_the_progress_bar_counts_done_running_and_failed(capsys: object) -> None:
