@@ -1,4 +1,5 @@
-"""The PyBullet simulation of smarticles: settings, scenes, the physics world, the one stepping loop (``Runner``)."""
+"""The PyBullet simulation of smarticles: settings, scenes, the physics world (and MuJoCo's, behind one engine
+interface), the one stepping loop (``Runner``)."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ _EXPORTS: dict[str, str] = {
     'Scene': 'scenes', 'RobotPlacement': 'scenes', 'dense_scene': 'scenes', 'pair_scene': 'scenes',
     'random_scene': 'scenes',
     'Runner': 'runner', 'GaitController': 'runner', 'FeedbackController': 'runner',
-    'Physics': 'physics', 'PhysicsState': 'physics',
+    'Physics': 'physics', 'PhysicsState': 'engine', 'Engine': 'engine', 'MujocoPhysics': 'mujoco_engine',
     'run_trial': 'batch',
     'SimError': 'errors', 'ConfigError': 'errors', 'SceneError': 'errors', 'SimTrouble': 'errors',
 }

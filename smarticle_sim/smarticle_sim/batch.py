@@ -1,5 +1,7 @@
 """A batch trial: run a scene for N gait periods through the one ``Runner`` loop and record its ground truth.
 
+The engine is Bullet's ``Physics`` unless ``run_trial`` is given another (``engines.engine_factory``).
+
 The trial comes back as a ``smarticle_common.runs.Recording`` (the one run format on disk, npz).
 Samples are taken at ``DEFAULT_SAMPLE_RATE`` (20 Hz) unless asked otherwise; FSR and contacts are
 recorded only when asked (``record_fsr``, ``record_contacts``), so a default run costs little more than
@@ -21,13 +23,14 @@ from smarticle_common.topics import FSR_FACES
 
 from .errors import SimError, SimTrouble
 from .scenes import Scene
+from .engine import Engine, EngineFactory
 from .physics import ARM_JOINTS, Physics
 from .runner import Controller, GaitController, Hook, Runner
 from .settings import SimConfig
 
 #: Builds the extra controllers of a trial (e.g. feedback) from its physics and gait controller; they run
 #: before the gait controller in every tick.
-ControllerFactory = Callable[[Physics, GaitController], Sequence[Controller]]
+ControllerFactory = Callable[[Engine, GaitController], Sequence[Controller]]
 
 
 def scene_period(scene: Scene) -> float:
@@ -74,6 +77,18 @@ class _PoseReader:
         arms[...] = arm_rows
 
 
+class _EngineReader:
+    """Reads body poses and arm angles of any engine (``Engine.poses``, ``Engine.arm_angles``)."""
+
+    def __init__(self, physics: Engine) -> None:
+        self._physics = physics
+
+    def read(self, poses: np.ndarray, arms: np.ndarray) -> None:
+        """Write (N, 3) x, y, heading of the body normal into ``poses`` and (N, 2) alphas into ``arms``."""
+        poses[...] = self._physics.poses()
+        arms[...] = self._physics.arm_angles()
+
+
 def check_run_request(periods: float, sample_every: Any) -> int:
     """``sample_every`` as an int, or SimError if ``periods`` is not > 0 or ``sample_every`` not an integer >= 1."""
     if not (isinstance(periods, (int, float)) and math.isfinite(periods) and periods > 0):
@@ -86,7 +101,8 @@ def check_run_request(periods: float, sample_every: Any) -> int:
 def run_trial(config: SimConfig, scene: Scene, periods: float, sample_every: int | None = None,
               record_fsr: bool = False, record_contacts: bool = False,
               progress: bool = False, controllers: ControllerFactory | None = None,
-              start_time: float = 0.0, stop: Callable[[Runner], bool] | None = None) -> Recording:
+              start_time: float = 0.0, stop: Callable[[Runner], bool] | None = None,
+              engine: EngineFactory | None = None, contacts_between_samples: bool = False) -> Recording:
     """Run ``scene`` for ``periods`` gait periods from a synchronised start at ``start_time`` and record it.
 
     Samples are taken every ``sample_every`` control ticks (the first at t = 0); the default is about
@@ -97,7 +113,9 @@ def run_trial(config: SimConfig, scene: Scene, periods: float, sample_every: int
     say how close the run came to the trouble limits (the largest tilt and the deepest overlap at the
     trouble checks). ``controllers`` adds controllers (e.g. feedback) that act before the gait cores in
     every tick; they may record what they did themselves. ``stop`` (asked after every tick) ends the trial
-    early; the recording keeps the samples taken so far.
+    early; the recording keeps the samples taken so far. ``engine`` builds the world (default: Bullet's
+    ``Physics``; its ``run_meta`` joins the meta). With ``contacts_between_samples`` a sample's contacts
+    are the pairs that touched at any step since the sample before, not at its instant.
     """
     if sample_every is None:
         sample_every = default_sample_every(config)
@@ -118,7 +136,9 @@ def run_trial(config: SimConfig, scene: Scene, periods: float, sample_every: int
                      'alpha_max': r.gait.alpha_max if r.gait else None, **({'held': True} if r.held else {})}
                     for r in scene.robots],
     }
-    with Physics(config, scene) as physics:
+    physics: Engine = (engine or Physics)(config, scene)
+    meta.update(physics.run_meta())
+    try:
         gaits = GaitController.for_scene(physics)
         extra = list(controllers(physics, gaits)) if controllers is not None else []
         runner = Runner(physics, [*extra, gaits])
@@ -130,9 +150,10 @@ def run_trial(config: SimConfig, scene: Scene, periods: float, sample_every: int
         arms = np.empty((capacity, n, 2))
         fsrs = np.zeros((capacity if record_fsr else 0, n, n_faces))
         touching = np.zeros((capacity if record_contacts else 0, n, n), dtype=bool)
-        reader = _PoseReader(physics)
+        reader = _PoseReader(physics) if isinstance(physics, Physics) else _EngineReader(physics)
         bar = _progress_bar(ticks, progress)
         taken = 0
+        seen = np.zeros((n, n), dtype=bool)   # contacts since the last sample (contacts_between_samples)
 
         def sample(_: Runner) -> None:
             nonlocal taken
@@ -141,8 +162,17 @@ def run_trial(config: SimConfig, scene: Scene, periods: float, sample_every: int
             if record_fsr:
                 fsrs[taken] = physics.fsr()
             if record_contacts:
-                touching[taken] = physics.robot_contacts()
+                if contacts_between_samples:
+                    touching[taken] = seen
+                    seen[:] = False
+                else:
+                    touching[taken] = physics.robot_contacts()
             taken += 1
+
+        if record_contacts and contacts_between_samples:
+            def watch(_: Runner) -> None:
+                seen[...] |= physics.robot_contacts()
+            runner.step_hooks.append(watch)
 
         hooks = [Hook(sample_every, sample)]
         if bar is not None:
@@ -157,6 +187,8 @@ def run_trial(config: SimConfig, scene: Scene, periods: float, sample_every: int
                 bar.close()
             meta['peak_tilt_deg'] = math.degrees(physics.peak_tilt)
             meta['peak_overlap_mm'] = physics.peak_overlap * 1000.0
+    finally:
+        physics.close()
     fsr_out = fsrs[:taken] if record_fsr else np.zeros((taken, n, n_faces))
     contacts_out = touching[:taken] if record_contacts else np.zeros((taken, n, n), dtype=bool)
     return Recording(times[:taken].copy(), poses[:taken].copy(), arms[:taken].copy(), fsr_out.copy(),

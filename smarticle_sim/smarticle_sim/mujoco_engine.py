@@ -38,19 +38,21 @@ a body tipped past ``PhysicsConfig.max_tilt`` ends the run with ``meta['trouble'
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from smarticle_common.gait import TIME_EPS, SquareGait
 from smarticle_common.poses import body_headings_and_tilts
 from smarticle_common.runs import Recording
 from smarticle_common.topics import FSR_FACES
 
-from .batch import check_run_request, scene_period
+from .engine import EngineFactory, PhysicsState, robot_index
 from .errors import SimError
+from .noise import FrictionField
 from .scenes import Scene
 from .settings import SimConfig
+from .trouble import check_penetration, check_state
 
 if TYPE_CHECKING:
     import mujoco
@@ -153,8 +155,13 @@ class MujocoSettings:
         return round(self.servo_update / self.time_step)
 
 
-def build_model(config: SimConfig, scene: Scene, settings: MujocoSettings) -> mujoco.MjModel:
-    """The MJCF model of ``scene``'s robots on the plate (body ``robot{k}``, hinges ``robot{k}_arm{j}``)."""
+def build_model(config: SimConfig, scene: Scene, settings: MujocoSettings,
+                plate_pairs: bool = False) -> mujoco.MjModel:
+    """The MJCF model of ``scene``'s robots on the plate (body ``robot{k}``, hinges ``robot{k}_arm{j}``).
+
+    With ``plate_pairs`` (and always with 'hertz' contact) the plate's contacts are explicit pairs, one per
+    robot geom (``robot{k}_body_plate``, ...), whose friction can be set per robot (the friction field).
+    """
     import mujoco   # here, so that the settings can be imported (e.g. to check a spec) without the engine
 
     spec, ph = config.robot, config.physics
@@ -172,7 +179,8 @@ def build_model(config: SimConfig, scene: Scene, settings: MujocoSettings) -> mu
     # 'hertz': robot-robot contacts are found (overlap < 0 margin) but all inside the gap, so MuJoCo's solver
     # leaves them to ``hertz_contact_forces``; the plate is in another collision class (explicit pairs)
     robot_geom = ' contype="1" conaffinity="1" margin="0" gap="1"' if hertz else ''
-    plate_class = ' contype="2" conaffinity="2"' if hertz else ''
+    plate_pairs = plate_pairs or hertz
+    plate_class = ' contype="2" conaffinity="2"' if plate_pairs else ''
     for k, robot in enumerate(scene.robots):
         yaw = robot.heading - math.pi / 2.0          # the body's x axis from its normal (as in Physics)
         arms = []
@@ -191,12 +199,12 @@ def build_model(config: SimConfig, scene: Scene, settings: MujocoSettings) -> mu
             f'mass="{spec.body_mass!r}" friction="{ph.friction_robot_robot!r} 0 0"{robot_geom}/>'
             f'{"".join(arms)}</body>')
         contact_items.append(f'<exclude body1="robot{k}_link0" body2="robot{k}_link1"/>')
-        if hertz:   # the plate's contacts, MuJoCo's own: explicit pairs (the plate is out of the robots' filter)
+        if plate_pairs:   # the plate's contacts, MuJoCo's own: explicit pairs (the plate is out of the robots' filter)
             plate_friction = max(ph.friction_body_plate, ph.friction_robot_robot)   # MuJoCo's rule, as without
             for geom in (f'robot{k}_body', f'robot{k}_arm0_geom', f'robot{k}_arm1_geom'):
-                contact_items.append(f'<pair geom1="plate" geom2="{geom}" condim="3" margin="0" gap="0" '
-                                f'friction="{plate_friction!r} {plate_friction!r} 0 0 0" '
-                                f'solref="{settings.contact_timeconst!r} {settings.contact_dampratio!r}"/>')
+                contact_items.append(f'<pair name="{geom}_plate" geom1="plate" geom2="{geom}" condim="3" '
+                                     f'margin="0" gap="0" friction="{plate_friction!r} {plate_friction!r} 0 0 0" '
+                                     f'solref="{settings.contact_timeconst!r} {settings.contact_dampratio!r}"/>')
     half_plate = ph.plate_size / 2.0
     xml = (f'<mujoco><compiler angle="radian"/>'
            f'<option timestep="{settings.time_step!r}" gravity="0 0 {-ph.gravity!r}" cone="{settings.friction_cone}" '
@@ -210,17 +218,21 @@ def build_model(config: SimConfig, scene: Scene, settings: MujocoSettings) -> mu
     return mujoco.MjModel.from_xml_string(xml)
 
 
-def hertz_contact_forces(model: mujoco.MjModel, data: mujoco.MjData, law: HertzLaw, owner: np.ndarray) -> int:
+def hertz_contact_forces(model: mujoco.MjModel, data: mujoco.MjData, law: HertzLaw, owner: np.ndarray,
+                         normals: np.ndarray | None = None) -> int:
     """Set ``data.qfrc_applied`` to ``law``'s forces at every contact point between two robots now.
 
     Call between ``mj_step1`` and ``mj_step2``: the contacts are the present state's (each robot-robot point
     with its overlap, left out of MuJoCo's solver by the gap), the velocities too. A point's normal runs from
     geom 1 to geom 2; geom 2's body gets the force, geom 1's the opposite, both at the point. The effective
-    mass is the two links' (as Chrono takes its two bodies'). Returns the number of points that pushed.
+    mass is the two links' (as Chrono takes its two bodies'). Returns the number of points that pushed;
+    ``normals`` (at least ``data.ncon`` long), if given, gets each point's normal force (0 where none).
     """
     import mujoco
 
     data.qfrc_applied[:] = 0.0
+    if normals is not None:
+        normals[:data.ncon] = 0.0
     pushed = 0
     contact = data.contact
     a, b = owner[contact.geom1], owner[contact.geom2]
@@ -239,6 +251,8 @@ def hertz_contact_forces(model: mujoco.MjModel, data: mujoco.MjData, law: HertzL
         f_normal, f_tangent = law.forces(-float(contact.dist[i]), v_normal, v_tangent, m1 * m2 / (m1 + m2))
         if f_normal <= 0.0:
             continue
+        if normals is not None:
+            normals[i] = f_normal
         force = f_normal * normal
         if f_tangent > 0.0:
             force = force - (f_tangent / v_tangent) * tangent
@@ -255,101 +269,337 @@ def _point_velocity(model: mujoco.MjModel, data: mujoco.MjData, body: int, point
     return spatial[3:] + np.cross(spatial[:3], point - data.subtree_com[model.body_rootid[body]])
 
 
+class MujocoPhysics:
+    """N smarticles on a plate in MuJoCo: the MuJoCo implementation of ``engine.Engine``.
+
+    A step is one servo update (``MujocoSettings.servo_update``, ``steps_per_update`` MuJoCo steps): before
+    it, each arm's velocity actuator gets its speed goal from the last command (``send``), as in
+    ``run_mujoco`` of old. The control tick (``PhysicsConfig.control_tick``) must be a whole number of servo
+    updates; the FSR reading averages ``fsr_window`` over servo updates.
+
+    FSR forces follow ``physics.Physics.fsr``: every contact on an arm geom counts its normal force (MuJoCo's
+    solver force of the last step, ``mj_contactForce``, or the Hertz law's with 'hertz' contact) toward the
+    arm's front face when it pushes the arm toward -front (the link's -y), else toward its back face, times
+    the cosine between the push and the face normal. Noise: the gait's clock rates and servo delays are the
+    runner's (``GaitController``); the friction field sets the friction of each body's plate contact
+    (an explicit pair) once per tick. Trouble checks are Bullet's (``trouble.check_state`` and
+    ``check_penetration`` on the deepest overlap of any contact).
+    """
+
+    def __init__(self, config: SimConfig, scene: Scene, settings: MujocoSettings | None = None) -> None:
+        import mujoco
+
+        scene.validate(config.robot, config.physics.plate_size)
+        self.config = config
+        self.scene = scene
+        self.settings = settings = settings or MujocoSettings()
+        ph = config.physics
+        self._physics = ph
+        ratio = ph.control_tick / settings.servo_update
+        if abs(ratio - round(ratio)) > 1e-6 or round(ratio) < 1:
+            raise SimError(f'the control tick {ph.control_tick:g} s is not a whole number of servo updates '
+                           f'({settings.servo_update:g} s)')
+        self._steps_per_tick = round(ratio)
+        self._fsr_steps = max(1, round(ph.fsr_window / settings.servo_update))
+        noise = config.noise
+        #: The plate's friction field (``NoiseConfig.friction_sd`` > 0), or None: uniform friction.
+        self.friction_field: FrictionField | None = None
+        if noise.friction_sd > 0.0:
+            self.friction_field = FrictionField(noise.friction_sd, noise.friction_length, ph.plate_size,
+                                                noise.trial_seed(scene.seed))
+        self._mujoco = mujoco
+        self._model = model = build_model(config, scene, settings, plate_pairs=self.friction_field is not None)
+        self._data = data = mujoco.MjData(model)
+        n = len(scene.robots)
+        self._n = n
+        arm_joints = [model.joint(f'robot{k}_arm{j}').id for k in range(n) for j in (0, 1)]
+        self._arm_qpos = np.array([model.jnt_qposadr[i] for i in arm_joints])
+        self._arm_qvel = np.array([model.jnt_dofadr[i] for i in arm_joints])
+        free = [model.body_jntadr[model.body(f'robot{k}').id] for k in range(n)]
+        self._free_qpos = np.array([model.jnt_qposadr[i] for i in free])
+        self._free_qvel = np.array([model.jnt_dofadr[i] for i in free])
+        self._link_body = np.array([[model.body(f'robot{k}_link{j}').id for j in (0, 1)] for k in range(n)])
+        self._owner = np.full(model.ngeom, -1)      # robot of each geom (-1: the plate)
+        self._arm_of = np.full(model.ngeom, -1)     # arm (0, 1) of each geom (-1: a body or the plate)
+        for k in range(n):
+            for j in (0, 1):
+                self._arm_of[model.geom(f'robot{k}_arm{j}_geom').id] = j
+                self._owner[model.geom(f'robot{k}_arm{j}_geom').id] = k
+            self._owner[model.geom(f'robot{k}_body').id] = k
+        for k, robot in enumerate(scene.robots):
+            data.qpos[self._arm_qpos[2 * k]], data.qpos[self._arm_qpos[2 * k + 1]] = robot.alpha1, robot.alpha2
+        mujoco.mj_forward(model, data)
+        self._law = HertzLaw.of(settings, ph.friction_robot_robot) if settings.robot_contact == 'hertz' else None
+        self._normals = np.zeros(0)   # the Hertz law's normal force of each contact point of the last step
+        self._bandwidth = ph.servo_gain() / ph.time_step   # Bullet's speed goal per radian
+        self._targets = np.array([[r.alpha1, r.alpha2] for r in scene.robots], dtype=float).reshape(n, 2)
+        self._speeds = np.full(n, config.robot.servo_speed)   # as Bullet: hold the start at the servo's speed
+        self._step_count = 0
+        self._state: PhysicsState | None = None
+        self._deep_checks = 0
+        self.peak_tilt = 0.0
+        self.peak_overlap = 0.0
+        self._friction_factor = np.full(n, np.nan)
+        if self.friction_field is not None:
+            self._plate_pair = np.array([model.pair(f'robot{k}_body_plate').id for k in range(n)])
+            self._plate_friction = float(model.pair_friction[self._plate_pair[0], 0]) if n else 0.0
+            self.update_plate_friction()
+
+    # ----------------------------------------------------------------- properties
+    @property
+    def model(self) -> mujoco.MjModel:
+        """The MuJoCo model (for inspection; do not step it directly)."""
+        return self._model
+
+    @property
+    def data(self) -> mujoco.MjData:
+        """The MuJoCo data (for inspection; do not step it directly)."""
+        return self._data
+
+    @property
+    def n_robots(self) -> int:
+        """Number of robots."""
+        return self._n
+
+    @property
+    def time(self) -> float:
+        """Simulated time since the world was built (s): servo updates taken times their interval."""
+        return self._step_count * self.settings.servo_update
+
+    @property
+    def step_count(self) -> int:
+        """Servo updates taken."""
+        return self._step_count
+
+    @property
+    def steps_per_tick(self) -> int:
+        """Servo updates per control tick."""
+        return self._steps_per_tick
+
+    @property
+    def fsr_steps(self) -> int:
+        """Servo updates the FSR reading averages over (``PhysicsConfig.fsr_window``, at least 1)."""
+        return self._fsr_steps
+
+    def ticks_for(self, seconds: float) -> int:
+        """Number of control ticks in ``seconds`` of sim time (rounded)."""
+        return round(seconds / self._physics.control_tick)
+
+    def run_meta(self) -> dict[str, Any]:
+        """The engine, its version and settings, for a recording's meta."""
+        return {'engine': 'mujoco', 'mujoco_version': self._mujoco.__version__, 'mujoco': asdict(self.settings)}
+
+    # ----------------------------------------------------------------- commands and stepping
+    def command(self, robot: int, targets: tuple[float, float], speed: float | None = None) -> None:
+        """Command ``robot``'s servos: arm targets (rad) and speed limit (rad/s, capped at the servo's)."""
+        k = self.check_robot(robot)
+        t1, t2 = float(targets[0]), float(targets[1])
+        spd = self.config.robot.servo_speed if speed is None else float(speed)
+        if not (math.isfinite(t1) and math.isfinite(t2)):
+            raise SimError(f'robot {k}: joint targets must be finite, got {targets!r}')
+        if not (math.isfinite(spd) and spd > 0.0):
+            raise SimError(f'robot {k}: speed limit must be > 0 rad/s, got {speed!r}')
+        self.send(k, (t1, t2), spd)
+
+    def send(self, k: int, targets: tuple[float, float], speed: float) -> None:
+        """Set robot ``k``'s servo targets and speed limit (unchecked: for controllers)."""
+        self._targets[k] = targets
+        self._speeds[k] = min(speed, self.config.robot.servo_speed)
+
+    def step(self, n: int = 1) -> None:
+        """Advance ``n`` servo updates."""
+        mujoco, model, data = self._mujoco, self._model, self._data
+        law, substeps = self._law, self.settings.steps_per_update
+        qpos, bandwidth, speeds = self._arm_qpos, self._bandwidth, self._speeds[:, None]
+        for _ in range(n):
+            angles = data.qpos[qpos].reshape(self._n, 2)
+            data.ctrl[:] = np.clip(bandwidth * (self._targets - angles), -speeds, speeds).ravel()
+            if law is None:
+                mujoco.mj_step(model, data, nstep=substeps)
+            else:
+                for _ in range(substeps):
+                    mujoco.mj_step1(model, data)     # contacts and velocities of the state now
+                    if len(self._normals) < data.ncon:
+                        self._normals = np.zeros(max(data.ncon, 2 * len(self._normals)))
+                    hertz_contact_forces(model, data, law, self._owner, self._normals)
+                    mujoco.mj_step2(model, data)
+        self._step_count += n
+        self._state = None
+
+    # ----------------------------------------------------------------- ground truth
+    def state(self) -> PhysicsState:
+        """Ground truth of all robots now (cached until the next step)."""
+        if self._state is None:
+            data, free, dof = self._data, self._free_qpos, self._free_qvel
+            positions = data.qpos[free[:, None] + [0, 1, 2]].reshape(self._n, 3)
+            quats = data.qpos[free[:, None] + [4, 5, 6, 3]].reshape(self._n, 4)   # w, x, y, z -> Bullet's x, y, z, w
+            heading, tilt = body_headings_and_tilts(quats)
+            poses = np.column_stack([positions[:, 0], positions[:, 1], heading])
+            speed = np.linalg.norm(data.qvel[dof[:, None] + [0, 1, 2]].reshape(self._n, 3), axis=1)
+            self._state = PhysicsState(self.time, poses, positions, tilt, speed,
+                                       data.qpos[self._arm_qpos].reshape(self._n, 2).copy(),
+                                       data.qvel[self._arm_qvel].reshape(self._n, 2).copy())
+        return self._state
+
+    def poses(self) -> np.ndarray:
+        """(N, 3) x, y (m) and heading of the body normal (rad) of every robot."""
+        return self.state().poses
+
+    def arm_angles(self) -> np.ndarray:
+        """(N, 2) arm angles alpha1, alpha2 (rad)."""
+        return self.state().arm_angles
+
+    def arm_velocities(self) -> np.ndarray:
+        """(N, 2) arm angular velocities (rad/s)."""
+        return self.state().arm_velocities
+
+    def body_xy(self) -> np.ndarray:
+        """(N, 2) body centre x, y (m)."""
+        return self.state().positions[:, :2]
+
+    # ----------------------------------------------------------------- plate friction
+    def update_plate_friction(self) -> int:
+        """Set each body's plate-contact friction from the friction field at its position (when it differs
+        from the applied factor by more than ``NoiseConfig.friction_tolerance``); return the bodies changed."""
+        field = self.friction_field
+        if field is None:
+            return 0
+        factor = field.factor(self.body_xy())
+        changed = np.flatnonzero(~(np.abs(factor - self._friction_factor)
+                                   <= self.config.noise.friction_tolerance))
+        for k in changed:
+            self._model.pair_friction[self._plate_pair[k], :2] = self._plate_friction * factor[k]
+            self._friction_factor[k] = factor[k]
+        return int(changed.size)
+
+    # ----------------------------------------------------------------- contacts and FSR
+    def _robot_points(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Indices of the contact points between two robots now, and the robots of their geoms 1 and 2."""
+        contact = self._data.contact
+        a, b = self._owner[contact.geom1], self._owner[contact.geom2]
+        robots = (a >= 0) & (b >= 0) & (a != b)
+        if self._law is not None:   # the gap keeps robot-robot points that do not touch in the list
+            robots &= contact.dist < 0.0
+        points = np.flatnonzero(robots)
+        return points, a[points], b[points]
+
+    def fsr(self, robots: Sequence[int] | None = None) -> np.ndarray:
+        """(len(robots), 4) normal force (N) on each FSR face, in the order of ``FSR_FACES`` (as Bullet's)."""
+        return self.fsr_of(self.robot_list(robots))
+
+    def fsr_of(self, ks: list[int]) -> np.ndarray:
+        """``fsr`` of robots ``ks`` already checked (``FsrReading`` calls it every servo update)."""
+        out = np.zeros((len(ks), len(FSR_FACES)))
+        data, model = self._data, self._model
+        if data.ncon == 0:
+            return out
+        row_of = {k: row for row, k in enumerate(ks)}
+        contact = data.contact
+        arm1, arm2 = self._arm_of[contact.geom1], self._arm_of[contact.geom2]
+        wrench = np.zeros(6)
+        for i in np.flatnonzero((arm1 >= 0) | (arm2 >= 0)):
+            g1, g2 = int(contact.geom1[i]), int(contact.geom2[i])
+            sides = [(g, sign) for g, sign in ((g1, -1.0), (g2, 1.0))
+                     if self._arm_of[g] >= 0 and int(self._owner[g]) in row_of]
+            if not sides:
+                continue
+            force = 0.0
+            if contact.efc_address[i] >= 0:
+                self._mujoco.mj_contactForce(model, data, i, wrench)
+                force = float(wrench[0])
+            elif self._law is not None and i < len(self._normals):
+                force = float(self._normals[i])
+            if force <= 0.0:
+                continue
+            normal = contact.frame[i, :3]    # from geom 1 to geom 2: geom 2 is pushed along it, geom 1 against it
+            for g, sign in sides:
+                k, j = int(self._owner[g]), int(self._arm_of[g])
+                front = data.xmat[self._link_body[k, j]].reshape(3, 3)[:, 1]
+                along = force * sign * float(normal @ front)
+                if along < 0.0:
+                    out[row_of[k], 2 * j] -= along      # pushed toward -front: contact on the front face
+                else:
+                    out[row_of[k], 2 * j + 1] += along
+        return out
+
+    def robot_contacts(self) -> np.ndarray:
+        """(N, N) symmetric bool matrix: True where two robots touch now (any links)."""
+        out = np.zeros((self._n, self._n), dtype=bool)
+        _, a, b = self._robot_points()
+        out[a, b] = out[b, a] = True
+        return out
+
+    def touching(self, max_distance: float = 0.0) -> set[tuple[int, int]]:
+        """Pairs (i, j), i < j, of robots with a contact point at distance <= ``max_distance`` (m) now."""
+        points, a, b = self._robot_points()
+        near = self._data.contact.dist[points] <= max_distance
+        return {(int(min(i, j)), int(max(i, j))) for i, j in zip(a[near], b[near], strict=True)}
+
+    def max_penetration(self) -> tuple[int, float]:
+        """(robot, depth in m) of the deepest contact overlap now; (-1, 0.0) without contacts."""
+        contact = self._data.contact
+        if self._data.ncon == 0:
+            return -1, 0.0
+        depth = -contact.dist
+        if not np.all(np.isfinite(depth)):
+            i = int(np.flatnonzero(~np.isfinite(depth))[0])
+        else:
+            i = int(np.argmax(depth))
+            if depth[i] <= 0.0:
+                return -1, 0.0
+        a, b = int(self._owner[contact.geom1[i]]), int(self._owner[contact.geom2[i]])
+        return (a if a >= 0 else b), float(depth[i])
+
+    def check_trouble(self) -> None:
+        """Raise SimTrouble if a robot is not finite, off the plate, flipped, too fast or tunnelling (Bullet's
+        checks and limits, ``PhysicsConfig``)."""
+        s = self.state()
+        if s.tilt.size and np.isfinite(s.tilt).all():
+            self.peak_tilt = max(self.peak_tilt, float(s.tilt.max()))
+        check_state(s.time, s.positions, s.tilt, s.speed, s.arm_angles, self._physics, self.config.robot.body_height)
+        robot, depth = self.max_penetration()
+        if depth == depth:
+            self.peak_overlap = max(self.peak_overlap, depth)
+        self._deep_checks = check_penetration(s.time, robot, depth, self._physics, self._deep_checks)
+
+    # ----------------------------------------------------------------- housekeeping
+    def check_robot(self, robot: int) -> int:
+        """Return ``robot`` as an index or raise SceneError."""
+        return robot_index(robot, self._n)
+
+    def robot_list(self, robots: Sequence[int] | None) -> list[int]:
+        """All robots, or the given ones checked."""
+        return list(range(self._n)) if robots is None else [robot_index(k, self._n) for k in robots]
+
+    def close(self) -> None:
+        """Nothing to release (the model and data go with the object); idempotent, as ``Physics.close``."""
+        self._state = None
+
+    def __enter__(self) -> MujocoPhysics:
+        """Context manager, as ``Physics``'s."""
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        """Close."""
+        self.close()
+
+
+def mujoco_engine(settings: MujocoSettings | None = None) -> EngineFactory:
+    """An engine factory (``Runner.with_gaits``, ``batch.run_trial``) of MuJoCo worlds with ``settings``."""
+    def build(config: SimConfig, scene: Scene) -> MujocoPhysics:
+        return MujocoPhysics(config, scene, settings)
+    return build
+
+
 def run_mujoco(config: SimConfig, scene: Scene, periods: float, sample_every: int,
                settings: MujocoSettings | None = None) -> Recording:
-    """Run ``scene`` for ``periods`` gait periods in MuJoCo from a synchronised start at t = 0.
+    """Run ``scene`` for ``periods`` gait periods in MuJoCo from a synchronised start at t = 0: ``batch.run_trial``
+    through the one ``Runner`` with a ``MujocoPhysics``.
 
-    Samples every ``sample_every`` control ticks (``PhysicsConfig.control_tick``), like ``run_trial``;
-    ``contacts[s]`` is True for a pair of robots that touched at any servo update (1/960 s) since the sample before.
+    Samples every ``sample_every`` control ticks; ``contacts[s]`` is True for a pair of robots that touched at
+    any servo update since the sample before (``run_trial``'s ``contacts_between_samples``).
     """
-    import mujoco
+    from .batch import run_trial
 
-    settings = settings or MujocoSettings()
-    sample_every = check_run_request(periods, sample_every)
-    gaits = [SquareGait(r.gait) if r.gait is not None else None for r in scene.robots]
-    period = scene_period(scene)
-    model = build_model(config, scene, settings)
-    data = mujoco.MjData(model)
-    n = len(scene.robots)
-    qpos = [model.jnt_qposadr[model.joint(f'robot{k}_arm{j}').id] for k in range(n) for j in (0, 1)]
-    free = np.array([model.jnt_qposadr[model.body_jntadr[model.body(f'robot{k}').id]] for k in range(n)])
-    owner = np.full(model.ngeom, -1)
-    for g in range(model.ngeom):
-        name = model.body(model.geom_bodyid[g]).name
-        if name.startswith('robot'):
-            owner[g] = int(name[5:].split('_')[0])
-    for k, robot in enumerate(scene.robots):
-        data.qpos[qpos[2 * k]], data.qpos[qpos[2 * k + 1]] = robot.alpha1, robot.alpha2
-    mujoco.mj_forward(model, data)
-    law = HertzLaw.of(settings, config.physics.friction_robot_robot) if settings.robot_contact == 'hertz' else None
-    bandwidth = config.physics.servo_gain() / config.physics.time_step   # Bullet's speed goal per radian
-    targets = np.array([[r.alpha1, r.alpha2] for r in scene.robots])
-    speeds = np.zeros(n)
-    for gait in gaits:
-        if gait is not None:
-            gait.start(0.0)
-    sample_dt = sample_every * config.physics.control_tick
-    samples = int(math.floor(periods * period / sample_dt + 1e-9)) + 1
-    updates_per_sample = round(sample_dt / settings.servo_update)
-    if abs(sample_dt / settings.servo_update - updates_per_sample) > 1e-6:
-        raise SimError(f'the sample interval {sample_dt:g} s is not a whole number of servo updates '
-                       f'({settings.servo_update:g} s)')
-    times = np.zeros(samples)
-    poses = np.zeros((samples, n, 3))
-    arms = np.zeros((samples, n, 2))
-    touching = np.zeros((samples, n, n), dtype=bool)
-    meta: dict[str, Any] = {
-        'engine': 'mujoco', 'mujoco_version': mujoco.__version__, 'mujoco': asdict(settings),
-        'robot': asdict(config.robot), 'physics': asdict(config.physics), 'scene': scene.name, 'seed': scene.seed,
-        'periods': periods, 'period': period, 'start_time': 0.0, 'sample_every': sample_every,
-        'sample_rate': 1.0 / sample_dt, 'fsr_recorded': False, 'contacts_recorded': True,
-        'fsr_faces': list(FSR_FACES), 'trouble': '', 'peak_tilt_deg': 0.0, 'peak_overlap_mm': 0.0}
-    peak_tilt, peak_overlap = 0.0, 0.0
-    seen = np.zeros((n, n), dtype=bool)
-    taken = 0
-    for s in range(samples):
-        if s > 0:
-            for _ in range(updates_per_sample):
-                t = data.time
-                for k, gait in enumerate(gaits):
-                    if gait is not None:
-                        command = gait.command(t + TIME_EPS)
-                        targets[k], speeds[k] = command.targets, command.speed
-                angles = data.qpos[qpos].reshape(n, 2)
-                goal = np.clip(bandwidth * (targets - angles), -speeds[:, None], speeds[:, None])
-                data.ctrl[:] = goal.ravel()
-                if law is None:
-                    mujoco.mj_step(model, data, nstep=settings.steps_per_update)
-                else:
-                    for _ in range(settings.steps_per_update):
-                        mujoco.mj_step1(model, data)     # contacts and velocities of the state now
-                        hertz_contact_forces(model, data, law, owner)
-                        mujoco.mj_step2(model, data)
-                a, b = owner[data.contact.geom1], owner[data.contact.geom2]
-                robots = (a >= 0) & (b >= 0) & (a != b)
-                if law is not None:   # the gap keeps robot-robot points that do not touch in the list
-                    robots &= data.contact.dist < 0.0
-                if robots.any():
-                    seen[a[robots], b[robots]] = seen[b[robots], a[robots]] = True
-                    peak_overlap = max(peak_overlap, -float(data.contact.dist[robots].min()))
-        quats = data.qpos[free[:, None] + [4, 5, 6, 3]]      # MuJoCo keeps w, x, y, z; Bullet's order is x, y, z, w
-        heading, tilt = body_headings_and_tilts(quats)
-        times[s] = data.time
-        poses[s, :, :2] = data.qpos[free[:, None] + [0, 1]]
-        poses[s, :, 2] = heading
-        arms[s] = data.qpos[qpos].reshape(n, 2)
-        touching[s], seen[:] = seen, False
-        taken = s + 1
-        peak_tilt = max(peak_tilt, float(tilt.max()))
-        if not np.all(np.isfinite(poses[s])):
-            meta['trouble'] = f'non-finite state at t = {data.time:.3f} s (MuJoCo)'
-            break
-        if peak_tilt > config.physics.max_tilt:
-            k = int(np.argmax(tilt))
-            meta['trouble'] = (f'robot {k} tipped {math.degrees(float(tilt[k])):.1f} deg at t = {data.time:.3f} s '
-                               f'(MuJoCo)')
-            break
-    meta['peak_tilt_deg'] = math.degrees(peak_tilt)
-    meta['peak_overlap_mm'] = peak_overlap * 1000.0
-    return Recording(times[:taken], poses[:taken], arms[:taken], np.zeros((taken, n, len(FSR_FACES))),
-                     touching[:taken], config.robot.body_length, meta)
+    return run_trial(config, scene, periods, sample_every, record_contacts=True, engine=mujoco_engine(settings),
+                     contacts_between_samples=True)

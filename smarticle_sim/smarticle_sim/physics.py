@@ -21,8 +21,7 @@ computed only when asked for.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 from smarticle_common.facts import RobotSpec
@@ -32,7 +31,9 @@ from smarticle_common.topics import FSR_FACES
 from smarticle_sim.quiet import BulletClient, pybullet, silenced_output
 
 from .settings import AUTHORS_ARM_MASS, AUTHORS_LINK_DENSITY, PhysicsConfig, SimConfig
-from .errors import SceneError, SimError
+from .engine import FsrReading as FsrReading   # its home was here: ``physics.FsrReading`` still names it
+from .engine import PhysicsState, robot_index
+from .errors import SimError
 from .noise import FrictionField
 from .scenes import RobotPlacement, RobotState, Scene
 from .trouble import check_penetration, check_state
@@ -44,21 +45,11 @@ ARM_JOINTS: tuple[int, int] = (0, 1)
 SOFT_PLATE_STIFFNESS_FACTOR = 1.0e6
 
 
-@dataclass(frozen=True)
-class PhysicsState:
-    """Ground truth of all robots at one instant (arrays indexed by robot id)."""
-
-    time: float
-    poses: np.ndarray           # (N, 3): x (m), y (m), heading of the body normal (rad, [-pi, pi))
-    positions: np.ndarray       # (N, 3): body centre x, y, z (m)
-    tilt: np.ndarray            # (N,): angle between the body z axis and the vertical (rad)
-    speed: np.ndarray           # (N,): body centre speed (m/s)
-    arm_angles: np.ndarray      # (N, 2): alpha1, alpha2 (rad)
-    arm_velocities: np.ndarray  # (N, 2): d alpha / dt (rad/s)
-
-
 class Physics:
-    """N smarticles on a plate in their own PyBullet client; step it, command its servos, read ground truth."""
+    """N smarticles on a plate in their own PyBullet client; step it, command its servos, read ground truth.
+
+    The Bullet implementation of ``engine.Engine``: a step is one ``PhysicsConfig.time_step``.
+    """
 
     def __init__(self, config: SimConfig, scene: Scene) -> None:
         scene.validate(config.robot, config.physics.plate_size)
@@ -231,6 +222,15 @@ class Physics:
     def control_tick(self) -> float:
         """Seconds of sim time in one control tick."""
         return self._physics.control_tick
+
+    @property
+    def fsr_steps(self) -> int:
+        """Physics steps the FSR reading averages over (``PhysicsConfig.fsr_steps``)."""
+        return self._physics.fsr_steps
+
+    def run_meta(self) -> dict[str, Any]:
+        """Nothing: a recording without an ``engine`` entry is Bullet's."""
+        return {}
 
     # ----------------------------------------------------------------- commands
     def command(self, robot: int, targets: tuple[float, float], speed: float | None = None) -> None:
@@ -409,9 +409,9 @@ class Physics:
         i.e. the arm link's +y side) when its force pushes the arm toward -y, else toward ``back``; only
         the component of the contact force along the face normal counts.
         """
-        return self._fsr_of(self.robot_list(robots))
+        return self.fsr_of(self.robot_list(robots))
 
-    def _fsr_of(self, ks: list[int]) -> np.ndarray:
+    def fsr_of(self, ks: list[int]) -> np.ndarray:
         """``fsr`` of robots ``ks`` already checked (``FsrReading`` calls it every physics step)."""
         out = np.zeros((len(ks), len(FSR_FACES)))
         # bound once (the client wraps every attribute access); link states only for arms in contact
@@ -512,10 +512,7 @@ class Physics:
     # ----------------------------------------------------------------- housekeeping
     def check_robot(self, robot: int) -> int:
         """Return ``robot`` as an index or raise SceneError."""
-        if isinstance(robot, bool) or not isinstance(robot, (int, np.integer)) \
-                or not 0 <= robot < self.n_robots:
-            raise SceneError(f'unknown robot {robot!r}: this world has robots 0..{self.n_robots - 1}')
-        return int(robot)
+        return robot_index(robot, self.n_robots)
 
     def robot_list(self, robots: Sequence[int] | None) -> list[int]:
         """All robots, or the given ones checked."""
@@ -540,39 +537,6 @@ class Physics:
     def __exit__(self, *exc: object) -> None:
         """Disconnect the client."""
         self.close()
-
-
-class FsrReading:
-    """The sim's FSR reading of some robots, step by step: each face's force averaged over the physics steps
-    of ``PhysicsConfig.fsr_window`` (``fsr_steps``), so an impulsive kick reads the same at every time step.
-
-    Call ``step()`` once after every physics step; with ``fsr_steps`` = 1 it is ``Physics.fsr`` itself.
-    ``take_peak()`` gives each face's largest reading since the previous take: the FSR sample of a control
-    tick (collision kicks are shorter than a tick), on the batch feedback path and in the sim bridge alike.
-    """
-
-    def __init__(self, physics: Physics, robots: Sequence[int] | None = None) -> None:
-        self.physics = physics
-        self.robots = physics.robot_list(robots)
-        self.steps = physics.config.physics.fsr_steps
-        self._history = np.zeros((self.steps, len(self.robots), len(FSR_FACES)))
-        self._next = 0
-        self._peak: np.ndarray | None = None
-
-    def step(self) -> np.ndarray:
-        """(len(robots), 4) reading after the step just taken: the mean force of the last ``steps`` steps."""
-        forces = self.physics._fsr_of(self.robots)   # the robots were checked once, in the constructor
-        if self.steps > 1:
-            self._history[self._next] = forces
-            self._next = (self._next + 1) % self.steps
-            forces = self._history.sum(axis=0) / self.steps
-        self._peak = forces if self._peak is None else np.maximum(self._peak, forces)
-        return forces
-
-    def take_peak(self) -> np.ndarray | None:
-        """Each face's largest reading since the previous call (None: no step since), and start over."""
-        peak, self._peak = self._peak, None
-        return peak
 
 
 def box_inertia(mass: float, size_x: float, size_y: float, size_z: float) -> tuple[float, float, float]:

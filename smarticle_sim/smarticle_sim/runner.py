@@ -1,10 +1,11 @@
 """The one stepping loop: a ``Runner`` owns the tick, its controllers, trouble checks and observer hooks.
 
-Modelled on dm_control's ``rl/control.py``: the physics (``physics.Physics``) knows bodies, joints,
+Modelled on dm_control's ``rl/control.py``: the physics, any ``engine.Engine`` (dm_control's abstract
+``Physics``: Bullet's ``physics.Physics`` or MuJoCo's ``mujoco_engine.MujocoPhysics``), knows bodies, joints,
 contacts and sensors; what acts on the robots is a *controller* plugged into the runner; the runner's
 ``tick`` is the only place that steps the physics:
 
-1. the plate's friction field, if the physics has one (``Physics.update_plate_friction``);
+1. the plate's friction field, if the physics has one (``Engine.update_plate_friction``);
 2. every controller's ``before_tick(runner)``, in the order given (e.g. the feedback controller, whose
    halts the gait controller then respects, before the gait controller);
 3. ``physics.step(steps_per_tick)``;
@@ -26,8 +27,9 @@ import numpy as np
 from smarticle_common.gait import GaitConfig, SquareGait, TIME_EPS, board_time
 
 from .errors import ConfigError
+from .engine import Engine, EngineFactory, FsrReading
 from .noise import ServoDelays, clock_rates
-from .physics import FsrReading, Physics
+from .physics import Physics
 from .scenes import Scene
 from .settings import SimConfig
 
@@ -49,9 +51,9 @@ class Hook:
 
 
 class Runner:
-    """Steps a ``Physics`` one control tick at a time with its controllers and trouble checks."""
+    """Steps an engine (``engine.Engine``) one control tick at a time with its controllers and trouble checks."""
 
-    def __init__(self, physics: Physics, controllers: Sequence[Controller] = ()) -> None:
+    def __init__(self, physics: Engine, controllers: Sequence[Controller] = ()) -> None:
         self.physics = physics
         self.controllers: list[Controller] = list(controllers)
         #: The gait controller among ``controllers``, when built by ``with_gaits``.
@@ -65,9 +67,11 @@ class Runner:
         self._friction = physics.update_plate_friction if physics.friction_field is not None else None
 
     @classmethod
-    def with_gaits(cls, config: SimConfig, scene: Scene, before: Sequence[Controller] = ()) -> Runner:
-        """A new Physics of ``scene`` stepped with each robot's gait (``runner.gaits``), after ``before``."""
-        physics = Physics(config, scene)
+    def with_gaits(cls, config: SimConfig, scene: Scene, before: Sequence[Controller] = (),
+                   engine: EngineFactory | None = None) -> Runner:
+        """A new world of ``scene`` (``engine``'s; default Bullet's ``Physics``) stepped with each robot's gait
+        (``runner.gaits``), after ``before``."""
+        physics = (engine or Physics)(config, scene)
         gaits = GaitController.for_scene(physics)
         runner = cls(physics, [*before, gaits])
         runner.gaits = gaits
@@ -147,7 +151,7 @@ class GaitController:
     A command that went out is never re-timed; a halt drops a command still waiting and holds at once.
     """
 
-    def __init__(self, physics: Physics, gaits: Sequence[GaitConfig | None],
+    def __init__(self, physics: Engine, gaits: Sequence[GaitConfig | None],
                  clock_rates: Sequence[float] | np.ndarray | None = None, servo_jitter: float = 0.0,
                  seed: int = 0) -> None:
         n = len(gaits)
@@ -171,7 +175,7 @@ class GaitController:
         self._pending_at = np.full(n, math.inf)   # sim time a delayed command goes out
 
     @classmethod
-    def for_scene(cls, physics: Physics) -> GaitController:
+    def for_scene(cls, physics: Engine) -> GaitController:
         """A controller running the gait each robot of the physics' scene was placed with (and its noise)."""
         noise = physics.config.noise
         seed = noise.trial_seed(physics.scene.seed)
