@@ -13,9 +13,10 @@ parameter files and values, remappings; the host's global ROS arguments are not 
 of them go on one executor (``--executor``: ``single``, rclpy's ``SingleThreadedExecutor``, the default,
 or ``events``, rclpy's experimental ``EventsExecutor``; ``EXECUTORS``). A node with a ``run(executor)``
 method (the lock-step sim bridge) drives that executor, so every hosted node's callbacks run inside its
-loop, and the host exits with its code when it returns; otherwise the host spins until Ctrl-C. Messages
-between hosted nodes still go through the middleware (rclpy has no intra-process path), but 2N + 2 Python
-interpreters become one and every hand-over stays in one process.
+loop, and the host exits with its code when it returns; otherwise the host spins until Ctrl-C. A message
+from one hosted node to another is handed over in-process, without the middleware, while nobody outside the
+host subscribes to its topic (``local_delivery``: rclpy has no intra-process path of its own); a topic
+someone outside subscribes to goes through the middleware to everyone, as between processes.
 
 A file with a node that is not composable, or any other bad input, is a one-line error and exit code 2,
 and nothing is started; a node that cannot start (a bad parameter) ends the host with exit code 2.
@@ -111,6 +112,8 @@ def _init_and_host(actions: Sequence[Any], args: list[str] | None,
 
     from smarticle_driver.errors import DriverError
 
+    from .local_delivery import connect, hosted_topics
+
     rclpy.init(args=args)
     nodes: list[Any] = []
     code = 0
@@ -124,8 +127,10 @@ def _init_and_host(actions: Sequence[Any], args: list[str] | None,
         for node in nodes:
             executor.add_node(node)
         runners = [node for node in nodes if callable(getattr(node, 'run', None))]
+        delivery = connect(nodes)
         rclpy.logging.get_logger(NAME).info(f'hosting {len(nodes)} nodes on one executor: '
-                                            + ', '.join(n.get_fully_qualified_name() for n in nodes))
+                                            + ', '.join(n.get_fully_qualified_name() for n in nodes)
+                                            + f'; {hosted_topics(delivery)}')
         if len(runners) > 1:
             raise ParameterError('more than one hosted node drives its own loop: '
                                  + ', '.join(n.get_fully_qualified_name() for n in runners))

@@ -13,6 +13,7 @@ only on the seed and the commands, never on process scheduling.
 
 from __future__ import annotations
 
+import hashlib
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -199,6 +200,11 @@ class BridgeSettings:
         return cls.from_values(values)
 
 
+def poses_digest(poses: np.ndarray) -> str:
+    """SHA-256 (hex) of an (N, 3) pose array as float64 bytes: equal digests, equal poses bit for bit."""
+    return hashlib.sha256(np.ascontiguousarray(poses, dtype=np.float64).tobytes()).hexdigest()
+
+
 class SimBridgeCore:
     """Physics whose robots follow external joint commands, advanced one publish period at a time."""
 
@@ -304,6 +310,10 @@ class SimBridgeCore:
             return poses
         noise = self._noise.normal(size=poses.shape) * np.array([sigma_xy, sigma_xy, sigma_heading])
         return poses + noise
+
+    def poses_digest(self) -> str:
+        """SHA-256 of the ground-truth poses now (float64 bytes): one run against another, bit for bit."""
+        return poses_digest(self.physics.poses())
 
     def frame_due(self) -> bool:
         """True when the camera is on and the current sim time has reached the next frame time."""

@@ -146,11 +146,15 @@ class GliderMonitorNode(Node):
             self.report(msg.header, poses)
 
     def report(self, header: Any, poses: np.ndarray) -> None:
-        """Publish the bound pairs and the markers of this frame."""
+        """Publish the bound pairs and the markers of this frame, each only to someone listening (a new
+        subscriber gets the next report)."""
         bl = self.settings.glider.body_length
-        array = DiagnosticArray(header=header)
-        array.status = [glider_status(pair, bl, self.settings.glider.width) for pair in self.bound]
-        self.gliders_pub.publish(array)
+        if self.gliders_pub.get_subscription_count() > 0:
+            array = DiagnosticArray(header=header)
+            array.status = [glider_status(pair, bl, self.settings.glider.width) for pair in self.bound]
+            self.gliders_pub.publish(array)
+        if self.markers_pub.get_subscription_count() == 0:
+            return
         arms = self.arms[:len(poses)] if self.settings.show_arms else None
         shapes = scene_markers(poses, self.bound, arms, self.settings.dims, bl)
         marker_header = type(header)(stamp=header.stamp, frame_id=topics.ARENA_FRAME)

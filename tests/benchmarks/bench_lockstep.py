@@ -46,16 +46,31 @@ from tests.benchmarks._common import machine_line, markdown_table, out_path, wri
 ROOT = Path(__file__).resolve().parents[2]
 STACK_FILE = ROOT / 'smarticle_bringup' / 'launch' / 'sim_stack.launch.xml'
 START_AT, PERIOD = 0.5, 1.6
+DIGEST = re.compile(r'final poses: sha256 ([0-9a-f]{64})')
 RTF = re.compile(r'done at sim time ([\d.]+) s, real-time factor ([\d.]+) \(([\d.]+) per CPU second of this '
                  r'process; physics steps and FSR: (\d+)% of the wall time\)')
 
 
-def batch_rtf(robots: int, duration: float, feedback: bool) -> tuple[float, float]:
-    """x real time of the batch core (Runner + gait cores [+ impact controllers]) on the stack's scene:
-    (per wall second, per CPU second)."""
+class EveryNth:
+    """A controller that acts every ``n``-th tick only: the batch core's feedback sampled at the bridge's
+    publish period, as the lock-step stack samples it (the peak of the FSR readings since the last sample)."""
+
+    def __init__(self, controller: Any, n: int) -> None:
+        self.controller, self.n, self.ticks = controller, n, 0
+
+    def before_tick(self, runner: Any) -> None:
+        """Pass the tick on to the controller on every n-th tick, from the first."""
+        if self.ticks % self.n == 0:
+            self.controller.before_tick(runner)
+        self.ticks += 1
+
+
+def batch_rtf(robots: int, duration: float, feedback: bool) -> tuple[float, float, str]:
+    """x real time of the batch core (Runner + gait cores [+ impact controllers, sampling at the bridge's
+    publish period]) on the stack's scene: (per wall second, per CPU second, final poses digest)."""
     from smarticle_experiments.p6 import default_feedback_config
     from smarticle_feedback.controller import ImpactController
-    from smarticle_sim.bridge import BridgeSettings
+    from smarticle_sim.bridge import BridgeSettings, poses_digest
     from smarticle_sim.physics import Physics
     from smarticle_sim.runner import FeedbackController, GaitController, Runner
 
@@ -72,22 +87,23 @@ def batch_rtf(robots: int, duration: float, feedback: bool) -> tuple[float, floa
                     for k, r in enumerate(scene.robots) if r.gait is not None}
         for policy in policies.values():
             policy.start(START_AT)
-        runner.controllers.insert(0, FeedbackController(gaits, policies))
+        runner.controllers.insert(0, EveryNth(FeedbackController(gaits, policies), settings.ticks_per_publish))
     ticks = round(duration / settings.sim.physics.control_tick)
     try:
         start, cpu = time.perf_counter(), time.process_time()
         runner.run(ticks)
         wall, cpu = time.perf_counter() - start, time.process_time() - cpu
+        digest = poses_digest(physics.poses())
     finally:
         runner.close()
     sim = ticks * settings.sim.physics.control_tick
-    return sim / wall, sim / cpu
+    return sim / wall, sim / cpu, digest
 
 
 def ros_rtf(mode: str, executor: str, robots: int, duration: float, feedback: bool, log_dir: Path,
-            profile: Path | None = None) -> tuple[float, float, float, str]:
+            profile: Path | None = None) -> tuple[float, float, float, str, str]:
     """x real time of the sim stack in ``mode`` ('composed' or 'separate'): (per wall second, per CPU second
-    of the bridge's process, % of the wall time the bridge spent in the physics, note)."""
+    of the bridge's process, % of the wall time the bridge spent in the physics, final poses digest, note)."""
     words = [f'robots:={robots}', f'duration:={duration!r}', f'feedback:={str(feedback).lower()}',
              'wait_for_subscribers:=0']
     domain = DomainReservation()
@@ -105,10 +121,11 @@ def ros_rtf(mode: str, executor: str, robots: int, duration: float, feedback: bo
     text = result.stdout + result.stderr
     if mode == 'separate':
         text += '\n'.join(p.read_text(errors='replace') for p in log_dir.glob('sim_bridge-*.log'))
-    match = RTF.search(text)
-    if result.returncode != 0 or match is None:
-        return float('nan'), float('nan'), float('nan'), f'failed (exit {result.returncode}): {text[-300:]!r}'
-    return float(match.group(2)), float(match.group(3)), float(match.group(4)), ''
+    match, digest = RTF.search(text), DIGEST.search(text)
+    if result.returncode != 0 or match is None or digest is None:
+        return (float('nan'), float('nan'), float('nan'), '',
+                f'failed (exit {result.returncode}): {text[-300:]!r}')
+    return float(match.group(2)), float(match.group(3)), float(match.group(4)), digest.group(1), ''
 
 
 def print_profile(path: Path, lines: int = 25) -> None:
@@ -150,21 +167,23 @@ def main(argv: list[str] | None = None) -> int:
     configs = configurations(executors, not args.no_separate)
     runs: dict[tuple[str, str, bool], list[tuple[float, float, float]]] = {c: [] for c in configs}
     notes: dict[tuple[str, str, bool], str] = {}
+    digests: dict[tuple[str, str, bool], set[str]] = {c: set() for c in configs}
     with tempfile.TemporaryDirectory(prefix='bench_lockstep_') as work:
         for round_ in range(args.rounds):
             for config in configs:
                 path, executor, feedback = config
                 if path.startswith('batch'):
-                    wall, cpu = batch_rtf(args.robots, duration, feedback)
+                    wall, cpu, digest = batch_rtf(args.robots, duration, feedback)
                     figures = (wall, cpu, 100.0)
                 else:
                     log_dir = Path(work) / f'{path}-{executor}-{feedback}-{round_}'
-                    wall, cpu, physics, note = ros_rtf(path.split()[0], executor, args.robots, duration, feedback,
-                                                       log_dir)
+                    wall, cpu, physics, digest, note = ros_rtf(path.split()[0], executor, args.robots, duration,
+                                                               feedback, log_dir)
                     figures = (wall, cpu, physics)
                     if note:
                         notes[config] = note
                 runs[config].append(figures)
+                digests[config].add(digest)
                 print(f'[round {round_ + 1}] {path}, {executor}, feedback {feedback}: x {figures[0]:.2f} real time, '
                       f'x {figures[1]:.2f} per CPU second, physics {figures[2]:.0f}% of wall', flush=True)
         if args.profile:
@@ -176,14 +195,21 @@ def main(argv: list[str] | None = None) -> int:
         wall, cpu, physics = (statistics.median(values) for values in zip(*runs[config], strict=True))
         rows.append({'path': path, 'executor': executor, 'feedback': 'on' if feedback else 'off', 'rtf': wall,
                      'cpu_rtf': cpu, 'physics': physics, 'note': notes.get(config, '')})
-    for row in rows:
+    for row, config in zip(rows, configs, strict=True):
+        batch_config = next(c for c in configs if c[1] == '-' and c[2] == config[2])
         batch = next(r for r in rows if r['executor'] == '-' and r['feedback'] == row['feedback'])
         row['of_batch'] = row['rtf'] / batch['rtf']
+        row['cpu_of_batch'] = row['cpu_rtf'] / batch['cpu_rtf']
+        row['poses'] = ('-' if row is batch else
+                        'equal' if digests[config] == digests[batch_config] and len(digests[config]) == 1 else
+                        'DIFFER')
     print()
     print(markdown_table(rows, [('path', 'path', ''), ('executor', 'executor', ''), ('feedback', 'feedback', ''),
                                 ('rtf', 'x real time', '.2f'), ('of_batch', 'of the batch core', '.2f'),
-                                ('cpu_rtf', 'x per CPU second', '.2f'), ('physics', 'physics % of wall', '.0f'),
-                                ('note', 'note', '')]))
+                                ('cpu_rtf', 'x per CPU second', '.2f'),
+                                ('cpu_of_batch', 'per CPU, of the batch', '.2f'),
+                                ('physics', 'physics % of wall', '.0f'),
+                                ('poses', 'final poses vs batch', ''), ('note', 'note', '')]))
     print(f'\nload after the runs: {os.getloadavg()[0]:.2f} (1 min); CSV: {write_csv(out_path("lockstep.csv"), rows)}')
     if args.profile:
         print_profile(out_path('lockstep_composed.pstats'))
