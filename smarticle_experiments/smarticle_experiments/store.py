@@ -31,13 +31,19 @@ from typing import Any
 
 from . import __version__
 from .errors import StoreError
-from .trial_code import source_hash
+from .trial_code import exported_module, source_hash
 from .trials import code_versions
 
 DEFAULT_ROOT = Path('out/experiments')
-#: The modules whose code the built-in trial kinds run (the trial module imports every kind's code): the
-#: entries of ``trial_code.source_hash`` by default.
-TRIAL_MODULES: tuple[str, ...] = ('smarticle_experiments.trials',)
+#: The worker's entry point (package, exported name): the module it comes from imports the code of every built-in
+#: trial kind, so that module and what it imports are the trial code of the default code version.
+RUN_ENTRY: tuple[str, str] = ('smarticle_experiments', 'run_kind')
+
+
+def trial_modules(path: Sequence[Path] | None = None) -> tuple[str, ...]:
+    """The modules whose code the built-in trial kinds run, as entries of ``trial_code.source_hash``: the module
+    of the worker's entry point ``RUN_ENTRY``."""
+    return (exported_module(*RUN_ENTRY, path),)
 
 
 @lru_cache(maxsize=1)
@@ -55,11 +61,13 @@ def head_commit() -> str:
     return (head or 'no git') + ('+dirty' if head and dirty else '')
 
 
-def code_version(modules: Iterable[str] = TRIAL_MODULES, path: Sequence[Path] | None = None) -> dict[str, str]:
+def code_version(modules: Iterable[str] | None = None, path: Sequence[Path] | None = None) -> dict[str, str]:
     """The code version a trial key includes: the package version, the hash of the source of every project
-    module ``modules`` run (``trial_code.source_hash``, cached per process; ``path``: the folders to find the
-    packages in, default where Python imports them from) and the engines' library versions."""
-    return {'smarticle_experiments': __version__, 'source': source_hash(modules, path), **code_versions()}
+    module ``modules`` (default ``trial_modules()``: every built-in kind's) run (``trial_code.source_hash``,
+    cached per process; ``path``: the folders to find the packages in, default where Python imports them from)
+    and the engines' library versions."""
+    entries = trial_modules(path) if modules is None else tuple(modules)
+    return {'smarticle_experiments': __version__, 'source': source_hash(entries, path), **code_versions()}
 
 
 def json_ready(value: Any) -> Any:

@@ -90,6 +90,16 @@ def _lazy_exports(init: Path) -> dict[str, str]:
     return {}
 
 
+def exported_module(package: str, name: str, path: Sequence[Path] | None = None) -> str:
+    """The module ``package`` lazily exports ``name`` from (its ``_EXPORTS``); StoreError if it exports no such
+    name."""
+    init = locate(package, path)
+    module = _lazy_exports(init).get(name) if init is not None and init.name == '__init__.py' else None
+    if not module:
+        raise StoreError(f'{package} exports no {name!r}, so the trial code cannot be found')
+    return f'{package}.{module}'
+
+
 def imported_names(source: bytes, module: str, is_package: bool) -> set[str]:
     """Absolute names every import statement of a module's ``source`` names: modules, and ``module.name`` for
     each name of a ``from module import name`` (which may be a module or not)."""

@@ -13,14 +13,14 @@ import pytest
 
 from smarticle_experiments.errors import StoreError
 from smarticle_experiments.spec import load_spec
-from smarticle_experiments.store import TRIAL_MODULES, ResultStore, code_version
-from smarticle_experiments.trial_code import locate, module_files, source_hash
+from smarticle_experiments.store import ResultStore, code_version, trial_modules
+from smarticle_experiments.trial_code import exported_module, locate, module_files, source_hash
 
 
 def copy_tree(dest: Path) -> list[Path]:
     """Copy the packages of every module the trials run to ``dest/<package>/<package>`` (sources only); return
     the folders to find them in."""
-    tops = sorted({name.split('.')[0] for name in module_files(TRIAL_MODULES)})
+    tops = sorted({name.split('.')[0] for name in module_files(trial_modules())})
     path = []
     for top in tops:
         init = locate(top)
@@ -38,7 +38,7 @@ def edit(path: list[Path], module: str, text: str) -> None:
 
 
 def test_the_trial_code_is_what_the_trials_import_and_not_the_report() -> None:
-    names = set(module_files(TRIAL_MODULES))
+    names = set(module_files(trial_modules()))
     # the modules the old hand-written list left out are found from the imports
     assert {'smarticle_experiments.configs', 'smarticle_experiments.physics_study', 'smarticle_experiments.p6',
             'smarticle_experiments.c2_harvest', 'smarticle_experiments.results'} <= names
@@ -49,6 +49,19 @@ def test_the_trial_code_is_what_the_trials_import_and_not_the_report() -> None:
     assert not any(n.split('.')[0] in ('numpy', 'pybullet', 'os') for n in names)   # libraries: versions apart
     with pytest.raises(StoreError, match="'smarticle_experiments.no_such_kind'"):
         module_files(['smarticle_experiments.no_such_kind'])
+
+
+def test_every_registered_kind_runs_code_the_default_version_covers() -> None:
+    """The default trial code starts at the module of the worker's entry point (``run_kind``), which imports every
+    built-in kind: each kind's run function is defined in a module it reaches."""
+    from smarticle_experiments import KINDS
+
+    names = set(module_files(trial_modules()))
+    for name, kind in KINDS.items():
+        run = getattr(kind, 'run', None) or kind.function
+        assert run.__module__ in names, (name, run.__module__)
+    with pytest.raises(StoreError, match="exports no 'no_such_name'"):
+        exported_module('smarticle_experiments', 'no_such_name')
 
 
 def test_an_edit_of_trial_code_rekeys_stored_trials_and_an_edit_of_the_report_does_not(tmp_path: Path) -> None:
@@ -75,16 +88,16 @@ def test_an_edit_of_trial_code_rekeys_stored_trials_and_an_edit_of_the_report_do
 
 def test_uncommitted_edits_are_keyed_by_their_content(tmp_path: Path) -> None:
     path = copy_tree(tmp_path / 'tree')
-    first = source_hash(TRIAL_MODULES, path)
+    first = source_hash(trial_modules(path), path)
     edit(path, 'smarticle_sim.physics', '\n# edit A\n')
-    a = source_hash(TRIAL_MODULES, path)
+    a = source_hash(trial_modules(path), path)
     file = locate('smarticle_sim.physics', path)
     assert file is not None
     file.write_text(file.read_text().replace('# edit A', '# edit B'))
-    b = source_hash(TRIAL_MODULES, path)
+    b = source_hash(trial_modules(path), path)
     assert len({first, a, b}) == 3      # two different edits, two keys (not one 'dirty' key)
     file.write_text(file.read_text().replace('\n# edit B\n', ''))
-    assert source_hash(TRIAL_MODULES, path) == first
+    assert source_hash(trial_modules(path), path) == first
 
 
 def test_a_process_keys_the_code_it_imports_from(tmp_path: Path) -> None:
@@ -92,7 +105,7 @@ def test_a_process_keys_the_code_it_imports_from(tmp_path: Path) -> None:
     path = copy_tree(tmp_path / 'tree')
     env = {**os.environ, 'PYTHONPATH': os.pathsep.join(map(str, path))}
     script = ('import smarticle_experiments.trial_code as c, smarticle_experiments.store as s\n'
-              'print(c.__file__, s.TRIAL_MODULES[0])\nprint(c.source_hash(s.TRIAL_MODULES))')
+              'print(c.__file__, s.trial_modules()[0])\nprint(c.source_hash(s.trial_modules()))')
 
     def run() -> list[str]:
         done = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True, env=env,
@@ -101,7 +114,7 @@ def test_a_process_keys_the_code_it_imports_from(tmp_path: Path) -> None:
 
     where, _, before = run()
     assert Path(where).is_relative_to(tmp_path)
-    assert before == source_hash(TRIAL_MODULES, path)
+    assert before == source_hash(trial_modules(path), path)
     edit(path, 'smarticle_experiments.c2_harvest', '\n# edited\n')
     assert run()[2] not in (before, '')
 
