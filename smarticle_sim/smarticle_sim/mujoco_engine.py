@@ -2,8 +2,10 @@
 
 PyBullet is the simulation of this project. This module steps a ``Scene`` in MuJoCo instead, to tell
 what the robots, their gait and their start do from what Bullet's rigid contacts do (in Bullet
-two robots in phase never glide; is that Bullet's?). It is built from the same facts and returns the same
-``Recording`` as ``batch.run_trial``, so the glider analysis and the experiment reports read it unchanged.
+two robots in phase never glide; is that Bullet's?). ``MujocoPhysics`` implements the engine interface
+(``engine.Engine``), so the one ``Runner`` steps it with the same controllers (gait cores, their noise, the
+FSR feedback, contact watchers) and trouble checks as Bullet's ``Physics``, and ``batch.run_trial`` records
+it as the same ``Recording``: the glider analysis and the experiment reports read it unchanged.
 
 What is the same as the Bullet sim: the robot (``RobotSpec``: body and arm boxes, masses with the inertia of
 uniform boxes, hinges at the body's ends, arms ``arm_clearance`` above the plate, arms of one robot never
@@ -31,8 +33,8 @@ k_t v_t dt + g_t v_t capped at mu times the normal one, with Chrono's Hertz stif
 Young's modulus, Poisson ratio, restitution and effective curvature radius set here (the authors' values and
 Chrono's default radius) and the two links' masses.
 
-Not modelled here: noise (``NoiseConfig``), FSR forces, feedback, Bullet's trouble checks (a non-finite state or
-a body tipped past ``PhysicsConfig.max_tilt`` ends the run with ``meta['trouble']`` set, as in Bullet).
+FSR forces, noise and trouble checks are Bullet's where the engine allows (``MujocoPhysics``); the gait's
+commands go out at control ticks, as in Bullet. Not modelled here: a held robot, the authors' uneven masses.
 """
 
 from __future__ import annotations
@@ -273,9 +275,9 @@ class MujocoPhysics:
     """N smarticles on a plate in MuJoCo: the MuJoCo implementation of ``engine.Engine``.
 
     A step is one servo update (``MujocoSettings.servo_update``, ``steps_per_update`` MuJoCo steps): before
-    it, each arm's velocity actuator gets its speed goal from the last command (``send``), as in
-    ``run_mujoco`` of old. The control tick (``PhysicsConfig.control_tick``) must be a whole number of servo
-    updates; the FSR reading averages ``fsr_window`` over servo updates.
+    it, each arm's velocity actuator gets its speed goal from the last command (``send``) and the arm's angle
+    now (the servo of the module docstring). The control tick (``PhysicsConfig.control_tick``) must be a
+    whole number of servo updates; the FSR reading averages ``fsr_window`` over servo updates.
 
     FSR forces follow ``physics.Physics.fsr``: every contact on an arm geom counts its normal force (MuJoCo's
     solver force of the last step, ``mj_contactForce``, or the Hertz law's with 'hertz' contact) toward the
