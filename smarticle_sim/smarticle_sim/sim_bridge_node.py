@@ -94,6 +94,7 @@ class SimBridgeNode(Node):
             self.start_pub.publish(start)
         self.counts: dict[str, int] = {}
         self.commands_received = 0
+        self.published = [0, 0]   # /clock and /smarticles/poses messages published (the run's last log line)
         self.spun = 0.0   # wall time (monotonic) of the executor's last turn in the lock-step wait
         self.reported: set[tuple[str, int]] = set()   # (cause, robot) of bad inputs already logged
         self.warned_ids: set[int] = set()
@@ -167,6 +168,7 @@ class SimBridgeNode(Node):
         clock = self.Clock()
         clock.clock = now
         self.clock_pub.publish(clock)
+        self.published[0] += 1
         physics = self.core.physics
         state = physics.state()
         poses = self.core.poses()
@@ -189,6 +191,7 @@ class SimBridgeNode(Node):
         array.header.frame_id = topics.ARENA_FRAME
         array.poses = [pose_message(p) for p in poses]
         self.poses_pub.publish(array)
+        self.published[1] += 1
         self.robot_model.publish(now, poses, state.arm_angles)
         for k, pub in enumerate(self.pose_pubs):
             if pub.get_subscription_count() > 0:
@@ -310,7 +313,8 @@ class SimBridgeNode(Node):
         self.get_logger().info(f'done at sim time {self.core.time:.2f} s, real-time factor {rtf:.2f} ({per_cpu:.2f} '
                                f'per CPU second of this process; physics steps and FSR: '
                                f'{min(physics_wall / wall, 1.0):.0%} of the wall time)')
-        self.get_logger().info(f'final poses: sha256 {self.core.poses_digest()}')
+        self.get_logger().info(f'final poses: sha256 {self.core.poses_digest()}; published: '
+                               f'/clock {self.published[0]}, /smarticles/poses {self.published[1]}')
         self.publish_diagnostics(0, 'finished', rtf)
         return 0
 
@@ -373,6 +377,7 @@ class SimBridgeNode(Node):
                 clock = self.Clock()
                 clock.clock = Time(nanoseconds=self.core.time_ns).to_msg()
                 self.clock_pub.publish(clock)
+                self.published[0] += 1
                 self.resend_fsr()   # and a feedback node the sample its gait node waits on
                 last = now
                 if now - started > 5.0:
