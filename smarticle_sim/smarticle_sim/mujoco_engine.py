@@ -34,7 +34,8 @@ Young's modulus, Poisson ratio, restitution and effective curvature radius set h
 Chrono's default radius) and the two links' masses.
 
 FSR forces, noise and trouble checks are Bullet's where the engine allows (``MujocoPhysics``); the gait's
-commands go out at control ticks, as in Bullet. Not modelled here: a held robot, the authors' uneven masses.
+commands go out at control ticks, as in Bullet. ``PhysicsConfig.mass_model`` 'authors' gives the links Bullet's
+masses and inertias of the authors' model. Not modelled here: a held robot.
 """
 
 from __future__ import annotations
@@ -52,6 +53,7 @@ from smarticle_common.topics import FSR_FACES
 from .engine import EngineFactory, PhysicsState, robot_index
 from .errors import SimError
 from .noise import FrictionField
+from .physics import arm_masses, authors_inertias
 from .scenes import Scene
 from .settings import SimConfig
 from .trouble import check_penetration, check_state
@@ -167,9 +169,10 @@ def build_model(config: SimConfig, scene: Scene, settings: MujocoSettings,
     import mujoco   # here, so that the settings can be imported (e.g. to check a spec) without the engine
 
     spec, ph = config.robot, config.physics
-    if ph.mass_model != 'uniform':
-        raise SimError(f'PhysicsConfig.mass_model: the MuJoCo engine builds the uniform robot only, '
-                       f'got {ph.mass_model!r}')
+    masses = arm_masses(spec, ph.mass_model)
+    # the authors' model (``PhysicsConfig.mass_model``): Bullet's arm masses and every link's inertia, given
+    # explicitly (an <inertial> element overrides the inertia MuJoCo takes from the geoms)
+    inertias = authors_inertias(spec) if ph.mass_model == 'authors' else None
     if any(robot.held for robot in scene.robots):
         raise SimError('the MuJoCo engine holds no robot in place (RobotPlacement.held); run a held robot in '
                        'Bullet or Chrono')
@@ -187,16 +190,21 @@ def build_model(config: SimConfig, scene: Scene, settings: MujocoSettings,
         yaw = robot.heading - math.pi / 2.0          # the body's x axis from its normal (as in Physics)
         arms = []
         for j, (sign, axis) in enumerate(((-1.0, -1.0), (1.0, 1.0))):   # Physics: link axes -z and +z
+            inertial = '' if inertias is None else \
+                f'<inertial pos="{sign * half_l!r} 0 0" mass="{masses[j]!r}" diaginertia="{_triple(inertias[j + 1])}"/>'
             arms.append(
-                f'<body name="robot{k}_link{j}" pos="{sign * w / 2.0!r} 0 {arm_z!r}">'
+                f'<body name="robot{k}_link{j}" pos="{sign * w / 2.0!r} 0 {arm_z!r}">{inertial}'
                 f'<joint name="robot{k}_arm{j}" type="hinge" axis="0 0 {axis!r}"/>'
                 f'<geom name="robot{k}_arm{j}_geom" type="box" pos="{sign * half_l!r} 0 0" '
-                f'size="{half_l!r} {half_t!r} {half_h!r}" mass="{spec.arm_mass!r}" '
+                f'size="{half_l!r} {half_t!r} {half_h!r}" mass="{masses[j]!r}" '
                 f'friction="{ph.friction_robot_robot!r} 0 0"{robot_geom}/></body>')
             actuators.append(f'<velocity joint="robot{k}_arm{j}" kv="{settings.servo_kv!r}" '
                              f'forcelimited="true" forcerange="{-spec.servo_torque!r} {spec.servo_torque!r}"/>')
+        body_inertial = '' if inertias is None else \
+            f'<inertial pos="0 0 0" mass="{spec.body_mass!r}" diaginertia="{_triple(inertias[0])}"/>'
         bodies.append(
-            f'<body name="robot{k}" pos="{robot.x!r} {robot.y!r} {h / 2.0!r}" euler="0 0 {yaw!r}"><freejoint/>'
+            f'<body name="robot{k}" pos="{robot.x!r} {robot.y!r} {h / 2.0!r}" euler="0 0 {yaw!r}">{body_inertial}'
+            f'<freejoint/>'
             f'<geom name="robot{k}_body" type="box" size="{w / 2.0!r} {d / 2.0!r} {h / 2.0!r}" '
             f'mass="{spec.body_mass!r}" friction="{ph.friction_robot_robot!r} 0 0"{robot_geom}/>'
             f'{"".join(arms)}</body>')
@@ -218,6 +226,11 @@ def build_model(config: SimConfig, scene: Scene, settings: MujocoSettings,
            f'{"".join(bodies)}</worldbody><contact>{"".join(contact_items)}</contact>'
            f'<actuator>{"".join(actuators)}</actuator></mujoco>')
     return mujoco.MjModel.from_xml_string(xml)
+
+
+def _triple(values: tuple[float, float, float]) -> str:
+    """Three numbers for an MJCF attribute, exactly (repr)."""
+    return ' '.join(repr(float(v)) for v in values)
 
 
 def hertz_contact_forces(model: mujoco.MjModel, data: mujoco.MjData, law: HertzLaw, owner: np.ndarray,
