@@ -48,6 +48,45 @@ COMMANDER_CHECK = 0.5
 EXECUTOR_LOOK = 0.005
 
 
+class Lateness:
+    """Free mode at a real-time factor: the distribution of how late ticks are published after their due time.
+
+    A histogram of 0.1 ms bins up to 10 s (constant memory however long the run), the maximum, and the ticks
+    published more than one tick period late (the next tick was already due: a skipped tick in real time).
+    """
+
+    BIN = 1e-4
+
+    def __init__(self, period: float) -> None:
+        self.period = period   # wall seconds per tick
+        self.bins = [0] * 100_001
+        self.ticks = self.behind = 0
+        self.worst = 0.0
+
+    def add(self, late: float) -> None:
+        """Count one tick published ``late`` wall seconds after its due time (negative: early, counted as 0)."""
+        late = max(late, 0.0)
+        self.ticks += 1
+        self.worst = max(self.worst, late)
+        self.behind += late > self.period
+        self.bins[min(int(late / self.BIN), len(self.bins) - 1)] += 1
+
+    def quantile(self, q: float) -> float:
+        """The ``q`` quantile of the lateness (s), to the bin's upper edge (at most the maximum)."""
+        need, seen = q * self.ticks, 0
+        for i, n in enumerate(self.bins):
+            seen += n
+            if seen >= need and n:
+                return min((i + 1) * self.BIN, self.worst)
+        return self.worst
+
+    def line(self) -> str:
+        """The one-line summary the bridge logs at the end of a real-time run."""
+        return (f'tick lateness over {self.ticks} ticks: p50 {self.quantile(0.5) * 1e3:.1f} ms, p99 '
+                f'{self.quantile(0.99) * 1e3:.1f} ms, max {self.worst * 1e3:.1f} ms; {self.behind} tick(s) more '
+                f'than a tick period ({self.period * 1e3:g} ms) late')
+
+
 class SimBridgeNode(Node):
     """Thin ROS shell around SimBridgeCore."""
 
@@ -275,6 +314,8 @@ class SimBridgeNode(Node):
         first = True
         physics_wall = 0.0   # wall seconds inside the physics (advance), against the time in messages and nodes
         cpu0 = time.process_time()   # CPU seconds of this process (every thread): steadier than wall when shared
+        # free mode at a real-time factor: how late each tick's publication came after its wall-clock due time
+        lateness = Lateness(settings.publish_period / max(settings.real_time_factor, 1e-9))
         while rclpy.ok():
             if settings.lockstep:
                 missed = self.wait_for_commands(executor, first)
@@ -301,6 +342,7 @@ class SimBridgeNode(Node):
             wall = time.monotonic()
             if settings.real_time_factor > 0.0 and not settings.lockstep:
                 ahead = (self.core.time - sim0) / settings.real_time_factor - (wall - wall0)
+                lateness.add(-ahead)
                 if ahead > 0:
                     time.sleep(ahead)
             if wall - last_diag >= 1.0:
@@ -313,6 +355,8 @@ class SimBridgeNode(Node):
         self.get_logger().info(f'done at sim time {self.core.time:.2f} s, real-time factor {rtf:.2f} ({per_cpu:.2f} '
                                f'per CPU second of this process; physics steps and FSR: '
                                f'{min(physics_wall / wall, 1.0):.0%} of the wall time)')
+        if lateness.ticks:
+            self.get_logger().info(lateness.line())
         self.get_logger().info(f'final poses: sha256 {self.core.poses_digest()}; published: '
                                f'/clock {self.published[0]}, /smarticles/poses {self.published[1]}')
         self.publish_diagnostics(0, 'finished', rtf)
