@@ -10,10 +10,10 @@ __version__ = '0.1.0'
 _EXPORTS: dict[str, str] = {
     'ExperimentSpec': 'spec', 'load_spec': 'spec', 'spec_from_mapping': 'spec',
     'ResultStore': 'store',
-    'KINDS': 'trials', 'run_kind': 'trials',
+    'KINDS': 'kinds', 'run_kind': 'kinds', 'TrialKind': 'kind', 'KindParams': 'kind',
     'TrialResult': 'results', 'SingleResult': 'results', 'P6Result': 'results', 'C2HarvestResult': 'results',
     'DenseResult': 'results', 'PairResult': 'results', 'InadmissiblePairResult': 'results',
-    'GliderRecord': 'results', 'AccuracyResult': 'results', 'read_result': 'results',
+    'GliderRecord': 'results', 'AccuracyResult': 'results', 'read_result': 'kinds',
     'main': 'cli',
     'ExperimentError': 'errors', 'SpecError': 'errors', 'SchedulerError': 'errors', 'StoreError': 'errors',
     'ResultError': 'errors',

@@ -32,10 +32,10 @@ from smarticle_common.cli import add_version, closed_pipe_safe, seeds_argument
 from smarticle_sim.settings import NotConvergedWarning
 
 from .errors import ExperimentError, SchedulerError, SpecError
-from .harness import PROG, add_engine_arguments, positive_float, positive_int, run_spec
+from .harness import PROG, RunOptions, add_engine_arguments, positive_float, positive_int, run_spec
 from .spec import STATUSES, TAGS, ExperimentSpec, archive_names, builtin_names, load_spec
 from .store import DEFAULT_ROOT, ResultStore, code_version
-from .trials import KINDS
+from .kinds import KINDS
 
 
 
@@ -189,7 +189,7 @@ def cmd_run(args: argparse.Namespace) -> int:
 
     spec = resolve(args)
     print(run_plan(spec, args), flush=True)
-    trials, store, code = run_spec(spec, args)
+    trials, store, code = run_spec(spec, RunOptions.from_args(args))
     if args.report:
         print(f'report: {write_report(spec, trials, store, code)}')
     return 0

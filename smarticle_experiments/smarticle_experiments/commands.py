@@ -21,7 +21,7 @@ from smarticle_common.cli import seeds_argument
 
 from .assignments import parse_assignments
 from .errors import ExperimentError, SpecError
-from .harness import positive_float, run_mapping
+from .harness import RunOptions, positive_float, run_mapping
 from .store import DEFAULT_ROOT, ResultStore
 
 if TYPE_CHECKING:
@@ -101,7 +101,7 @@ def p6_run(args: argparse.Namespace) -> int:
             'physics': _assignments(args.set),
             'params': {'start': args.start, 'windows': windows, 'details': bool(args.contacts)},
             'grid': grid, 'report': ['p6']}
-    spec, trials, store, code = run_mapping(data, args.seeds, args)
+    spec, trials, store, code = run_mapping(data, args.seeds, RunOptions.from_args(args), args.command)
     path = write_report(spec, trials, store, code)
     sys.stdout.write(path.read_text() + f'\nreport: {path}\n')
     return 0
@@ -127,7 +127,7 @@ def c2_harvest_run(args: argparse.Namespace) -> int:
     data = {'name': 'c2_harvest', 'description': "where the feedback robot's C2 gliders sit in dense runs",
             'tags': ['calibration'], 'kind': 'c2_harvest', 'store': 'c2_harvest', 'periods': args.periods,
             'preset': args.preset, 'params': {'alpha_max_deg': args.alpha}}
-    spec, trials, store, _ = run_mapping(data, args.seeds, args)
+    spec, trials, store, _ = run_mapping(data, args.seeds, RunOptions.from_args(args), args.command)
     records = store.records(t.key for t in trials)
     samples = [sample_from_record(s) for r in records if r.get('status') == 'ok' for s in r['result']['samples']]
     if not samples:
@@ -246,7 +246,7 @@ def _study_settings(args: argparse.Namespace) -> tuple[dict[str, object], str]:
 
 def study_rows(store: ResultStore, keys: list[str] | None = None) -> list[StudyRow[Any]]:
     """The stored rows of a physics-study store: each trial's parameters, seed, physics rate and typed result."""
-    from .physics_study import study_row
+    from .kinds.study import study_row
 
     return [study_row(r) for r in store.records(keys) if r.get('status') == 'ok']
 
@@ -303,7 +303,7 @@ def physics_study_run(args: argparse.Namespace) -> int:
             blocks.append({'settings': [{**settings, 'contact_erp': float(erp), 'restitution': float(e),
                                          'time_step': 1.0 / n} for n in args.dt], 'speed_m_s': args.speeds})
         data.update(kind='study_impact', params={'label': label, 'phases': args.phases}, grid=blocks)
-    _, trials, store, _ = run_mapping(data, seeds, args)
+    _, trials, store, _ = run_mapping(data, seeds, RunOptions.from_args(args), args.command)
     print(study_table(args.experiment, study_rows(store, [t.key for t in trials])))
     return 0
 

@@ -12,8 +12,6 @@ from dataclasses import fields, replace
 from typing import Any
 
 from smarticle_common.gait import GaitConfig
-from smarticle_sim.chrono_reference import ChronoSettings
-from smarticle_sim.mujoco_engine import MujocoSettings
 from smarticle_sim.settings import NoiseConfig, PhysicsConfig, RobotSpec, SimConfig, robot_preset
 
 from .errors import SpecError
@@ -23,10 +21,6 @@ PHYSICS_FIELDS: frozenset[str] = frozenset(f.name for f in fields(PhysicsConfig)
 ROBOT_FIELDS: frozenset[str] = frozenset(f.name for f in fields(RobotSpec)) - {'name'}
 #: NoiseConfig field names a spec may set (``noise:`` mapping; unset fields are off, ``NoiseConfig.none()``).
 NOISE_FIELDS: frozenset[str] = frozenset(f.name for f in fields(NoiseConfig))
-#: MujocoSettings field names the MuJoCo kinds take (``params: {mujoco: {...}}`` or grid keys ``mujoco.X``).
-MUJOCO_FIELDS: frozenset[str] = frozenset(f.name for f in fields(MujocoSettings))
-#: ChronoSettings field names the Chrono kinds take (``params: {chrono: {...}}`` or grid keys ``chrono.X``).
-CHRONO_FIELDS: frozenset[str] = frozenset(f.name for f in fields(ChronoSettings))
 
 
 def noise_mapping(value: Any) -> dict[str, Any]:

@@ -3,7 +3,7 @@
 By default an embedded ``LocalCluster`` (one worker process per core, one thread each); with a scheduler
 address the same tasks go to an existing cluster (``dask scheduler`` / ``dask worker``, or
 dask-jobqueue on SLURM; docs/experiments.md). Each task is :func:`execute_trial`, a pure function of
-(kind, params, seed) that catches a trial's exception and returns it as a 'failed' record, so a trial
+(kind, typed parameters, seed) that catches a trial's exception and returns it as a 'failed' record, so a trial
 that raises costs only itself. The client stores each record as soon as its future completes; a
 worker killed mid-trial makes the scheduler run that task again elsewhere (``allowed-failures`` worker
 deaths per task), and ``retries`` covers errors of the task machinery itself.
@@ -24,20 +24,25 @@ from datetime import datetime, timezone
 from typing import Any
 
 from .errors import SchedulerError
+from .kind import KindParams
+from .kinds import run_kind, stored_params, trial_params
 from .spec import Trial
 from .store import ResultStore
-from .trials import code_versions, run_kind
+from .trials import code_versions
 
 #: Seconds to wait for an existing scheduler before giving up.
 CONNECT_TIMEOUT = 5.0
 
 
-def execute_trial(kind: str, params: Mapping[str, Any], seed: int, key: str, point: Mapping[str, Any],
+def execute_trial(kind: str, params: Mapping[str, Any] | KindParams, seed: int, key: str, point: Mapping[str, Any],
                   code: Mapping[str, str]) -> dict[str, Any]:
-    """Run one trial on a worker and return its full store record (a trial that raises: status 'failed')."""
+    """Run one trial on a worker and return its full store record (a trial that raises: status 'failed').
+    ``params`` are a registered kind's typed parameters (unpickling them imports the kind's module, which
+    registers the kind on the worker) or a ``module:function`` kind's mapping."""
     started = datetime.now(timezone.utc).isoformat(timespec='seconds')
     unix0, wall0, cpu0 = time.time(), time.perf_counter(), time.process_time()
-    record: dict[str, Any] = {'key': key, 'kind': kind, 'params': dict(params), 'seed': seed, 'point': dict(point),
+    record: dict[str, Any] = {'key': key, 'kind': kind, 'params': stored_params(params), 'seed': seed,
+                              'point': dict(point),
                               'code': dict(code), 'started': started,
                               'worker': {'host': socket.gethostname(), 'pid': os.getpid(), **code_versions()}}
     try:
@@ -141,8 +146,8 @@ def run_trials(trials: Sequence[Trial], store: ResultStore, client: Any, code: M
     unique = list({t.key: t for t in todo}.values())   # a grid may list one trial twice: run it once
     slots = sum(client.nthreads().values()) or 1
     stats = RunStats(len(trials), len(trials) - len(todo), 0, 0, 0, 0.0, len(client.nthreads()))
-    futures = {client.submit(execute_trial, t.kind, dict(t.params), t.seed, t.key, dict(t.point), dict(code),
-                             key=f'trial-{t.key}', pure=False, retries=retries): t for t in unique}
+    futures = {client.submit(execute_trial, t.kind, trial_params(t.kind, t.params), t.seed, t.key, dict(t.point),
+                             dict(code), key=f'trial-{t.key}', pure=False, retries=retries): t for t in unique}
     bar = Progress(len(unique), slots, progress)
     try:
         for future in as_completed(futures):

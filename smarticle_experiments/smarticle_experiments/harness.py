@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -54,29 +55,47 @@ def add_engine_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--no-progress', action='store_true', help='no progress bar')
 
 
+@dataclass(frozen=True)
+class RunOptions:
+    """How a run runs: the store root, the engine (an existing scheduler or a LocalCluster of ``workers``),
+    retries, whether failed trials run again, the progress bar."""
+
+    out: Path = DEFAULT_ROOT
+    scheduler: str | None = None
+    workers: int | None = None
+    retries: int = 2
+    retry_failed: bool = False
+    progress: bool = True
+
+    @classmethod
+    def from_args(cls, args: argparse.Namespace) -> RunOptions:
+        """The options of a command line parsed with ``add_engine_arguments``."""
+        return cls(out=Path(args.out), scheduler=args.scheduler, workers=args.workers, retries=args.retries,
+                   retry_failed=bool(args.retry_failed), progress=not args.no_progress)
+
+
 def summary_name(spec: ExperimentSpec) -> str:
     """``summary`` for the spec that owns its store, ``summary-<name>`` for one that shares another's."""
     return 'summary' if spec.store == spec.name else f'summary-{spec.name}'
 
 
-def run_spec(spec: ExperimentSpec, args: argparse.Namespace) -> tuple[list[Trial], ResultStore, dict[str, str]]:
-    """Run a spec's missing trials on the engine of ``args`` and write the summary; print the run's line."""
+def run_spec(spec: ExperimentSpec, options: RunOptions) -> tuple[list[Trial], ResultStore, dict[str, str]]:
+    """Run a spec's missing trials on the engine of ``options`` and write the summary; print the run's line."""
     from .engine import dask_client, run_trials
+    from .kinds import engine_missing
 
     code = code_version()
     trials = spec.trials(code)
-    store = ResultStore(args.out / spec.store)
-    from .trials import engine_missing
-
+    store = ResultStore(options.out / spec.store)
     missing = engine_missing(spec.kind)   # checked once per spec, before any cluster starts
     if missing is not None:
         print(f'{spec.name}: skipped, {len(trials)} trials not run: {missing}')
         return trials, store, code
-    if not {t.key for t in trials} - store.done(args.retry_failed):
+    if not {t.key for t in trials} - store.done(options.retry_failed):
         summary = store.write_summary(store.records(t.key for t in trials), summary_name(spec))
         print(f'{spec.name}: {len(trials)} trials: {len(trials)} already stored, 0 done now; summary {summary}')
         return trials, store, code
-    with dask_client(args.scheduler, args.workers) as client:   # connect before writing anything
+    with dask_client(options.scheduler, options.workers) as client:   # connect before writing anything
         store.folder.mkdir(parents=True, exist_ok=True)
         (store.folder / f'spec-{spec.name}.yaml').write_text(yaml.safe_dump(
             {'name': spec.name, 'kind': spec.kind, 'source': spec.source, 'base': dict(spec.base),
@@ -84,8 +103,8 @@ def run_spec(spec: ExperimentSpec, args: argparse.Namespace) -> tuple[list[Trial
         workers = len(client.nthreads())
         sys.stderr.write(f'{spec.name}: {len(trials)} trials, store {store.folder}, {workers} workers\n')
         try:
-            stats = run_trials(trials, store, client, code, retries=args.retries, retry_failed=args.retry_failed,
-                               progress=not args.no_progress)
+            stats = run_trials(trials, store, client, code, retries=options.retries,
+                               retry_failed=options.retry_failed, progress=options.progress)
         finally:   # also when interrupted: the summary of what is stored so far
             summary = store.write_summary(store.records(t.key for t in trials), summary_name(spec))
     print(f'{spec.name}: {stats.total} trials: {stats.skipped} already stored, {stats.ok} done now, '
@@ -94,11 +113,11 @@ def run_spec(spec: ExperimentSpec, args: argparse.Namespace) -> tuple[list[Trial
     return trials, store, code
 
 
-def run_mapping(data: dict[str, Any], seeds: Sequence[int], args: argparse.Namespace
+def run_mapping(data: dict[str, Any], seeds: Sequence[int], options: RunOptions, command: str
                 ) -> tuple[ExperimentSpec, list[Trial], ResultStore, dict[str, str]]:
     """Run the spec of a command (a mapping) over ``seeds`` (the report is ``report-<name>-seeds-<ranges>``)."""
-    spec = spec_from_mapping({**data, 'seeds': 1}, f'{PROG} {args.command}').with_seeds(list(seeds))
-    trials, store, code = run_spec(spec, args)
+    spec = spec_from_mapping({**data, 'seeds': 1}, f'{PROG} {command}').with_seeds(list(seeds))
+    trials, store, code = run_spec(spec, options)
     return spec, trials, store, code
 
 

@@ -35,7 +35,7 @@ from smarticle_sim.settings import PhysicsConfig, SimConfig
 from .configs import make_config
 from .errors import SpecError
 from .results import (StudyCollisionResult, StudyDenseResult, StudyDriftResult, StudyImpactResult,
-                      StudyInadmissibleResult, StudyPairResult, TrialResult, read_result)
+                      StudyInadmissibleResult, StudyPairResult, TrialResult)
 
 #: Body length (m) of the robot the study measures (the small preset's): lengths in the rows are in BL.
 BL = BODY_LENGTH
@@ -503,13 +503,6 @@ class StudyRow(Generic[R]):
     def label(self) -> str:
         """The setting's name in the tables."""
         return str(self.params['label'])
-
-
-def study_row(record: Mapping[str, Any]) -> StudyRow[Any]:
-    """The row of a stored physics-study record (``status: ok``): its result read back typed."""
-    params = record['params']
-    return StudyRow(params, int(record['seed']), dt_inv(params.get('settings') or {}),
-                    read_result(str(record['kind']), record['result']))
 
 
 def _admitted(rows: list[StudyRow[Any]], cls: type[R]) -> list[StudyRow[R]]:

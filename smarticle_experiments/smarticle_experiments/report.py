@@ -41,12 +41,13 @@ from smarticle_sim.settings import BULLET_SOLVER_RESIDUAL_THRESHOLD
 from smarticle_tracking.gliders import MIN_PERIODS, GliderConfig, PairKind, pair_kind, rule_text, travel_rate
 
 from .errors import ResultError
+from .kinds import KINDS, MUJOCO_KINDS, read_result
 from .results import (AccuracyResult, DenseResult, GliderRecord, InadmissiblePairResult, P6Result,
-                      PairResult, SingleResult, TrialResult, read_result)
+                      PairResult, SingleResult, TrialResult)
 from .spec import ExperimentSpec, Trial, canonical, seed_runs
 from .stats import Estimate, bootstrap_mean, fisher_p, kaplan_meier, logrank, wilson
 from .store import ResultStore, json_ready, write_atomic
-from .trials import MUJOCO_KINDS, config_of, ensemble_msd, msd_beta
+from .trials import config_of, ensemble_msd, msd_beta
 
 
 T = TypeVar('T')
@@ -1070,6 +1071,13 @@ PAIR_SECTIONS = frozenset({'p1', 'trajectories', 'configurations', 'lifetimes', 
                            'step_convergence'})
 
 
+def section_writer(kind: str, name: str) -> Callable[[Context], list[str]]:
+    """The writer of the report section ``name``: the report's own (``SECTIONS``), else the one the kind draws."""
+    if name in SECTIONS:
+        return SECTIONS[name]
+    return KINDS[kind].writers[name]
+
+
 def _yes_no(value: bool | None) -> str:
     """The 'inside' cell."""
     return 'n/a' if value is None else ('yes' if value else 'no')
@@ -1132,7 +1140,7 @@ def write_report(spec: ExperimentSpec, trials: list[Trial], store: ResultStore, 
     ctx = Context(spec, trials, records, folder)
     body: list[str] = []
     for name in spec.report:
-        body += [f'## {name}', '', *SECTIONS[name](ctx), '']
+        body += [f'## {name}', '', *section_writer(spec.kind, name)(ctx), '']
     ok = ctx.ok()
     words = [words_line(ctx.rule), ''] if set(spec.report) & PAIR_SECTIONS else []
     head = [f'# {spec.name}: {spec.description}', '',

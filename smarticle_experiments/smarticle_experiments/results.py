@@ -1,10 +1,11 @@
 """Typed trial results: what a trial kind returns, with units in the field names.
 
 A kind returns a frozen dataclass derived from ``TrialResult``; the engine stores ``as_dict()`` (the
-JSON record's ``result``) and the report reads it back typed with ``read_result(kind, stored)``, nested
-bound-pair records included (``GliderRecord``). Optional fields (default None) are left out of the stored dict
-while None, so a kind that gains a field keeps the stored bytes of the trials that do not ask for it; the
-fields are in the stored order, so ``as_dict()`` is the stored dict key for key.
+JSON record's ``result``) and the report reads it back typed with ``kinds.read_result(kind, stored)`` (the
+kind names its result type), nested bound-pair records included (``GliderRecord``). Optional fields (default
+None) are left out of the stored dict while None, so a kind that gains a field keeps the stored bytes of the
+trials that do not ask for it; the fields are in the stored order, so ``as_dict()`` is the stored dict key
+for key.
 
 Units: ``_bl`` body lengths, ``_w`` W (= BL for the smarticle),
 ``_deg`` degrees, ``_um`` micrometres, ``_periods`` gait periods; ``trouble`` is the SimTrouble message
@@ -18,7 +19,6 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from typing import Any, ClassVar, TypeVar
 
-from .errors import ResultError
 
 R = TypeVar('R', bound='StoredRecord')
 
@@ -319,32 +319,3 @@ class StudyImpactResult(TrialResult):
     overlap_mm: float               # deepest overlap (mm)
     restitution_by_phase: list[float]
     trouble: str
-
-
-#: The typed result of each built-in kind (a start that did not run: ``INADMISSIBLE_TYPES``).
-RESULT_TYPES: dict[str, type[TrialResult]] = {
-    'dense': DenseResult, 'pair': PairResult, 'pair_mujoco': PairResult, 'single': SingleResult,
-    'single_mujoco': SingleResult, 'p6': P6Result, 'c2_harvest': C2HarvestResult, 'accuracy': AccuracyResult,
-    'study_collision': StudyCollisionResult, 'study_drift': StudyDriftResult, 'study_pair': StudyPairResult,
-    'study_dense': StudyDenseResult, 'study_impact': StudyImpactResult,
-}
-
-#: The result of a kind's start that did not run (robots overlapping), told by ``admissible: false``.
-INADMISSIBLE_TYPES: dict[type[TrialResult], type[TrialResult]] = {
-    PairResult: InadmissiblePairResult, StudyCollisionResult: StudyInadmissibleResult,
-    StudyPairResult: StudyInadmissibleResult,
-}
-
-
-def read_result(kind: str, data: Mapping[str, Any]) -> TrialResult | dict[str, Any]:
-    """A stored result (the JSON record's ``result``) as its kind's typed record; a kind without a type
-    (a user's ``module:function``) gives the dict back. Raises ResultError if the stored dict does not fit."""
-    cls: type[TrialResult] | None = RESULT_TYPES.get(kind)
-    if cls in INADMISSIBLE_TYPES and data.get('admissible') is False:
-        cls = INADMISSIBLE_TYPES[cls]
-    if cls is None:
-        return dict(data)
-    try:
-        return cls.from_dict(data)
-    except TypeError as exc:
-        raise ResultError(f'a stored {kind} result does not fit {cls.__name__}: {exc}') from None

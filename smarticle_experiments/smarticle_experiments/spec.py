@@ -6,7 +6,7 @@ A spec file is a mapping with these keys (every other key is refused, naming it)
     description: one line
     tags: [paper]                 # what it is for: paper, benchmark, calibration, diagnostic (``TAGS``)
     status: current               # current or superseded (``list`` shows current specs, ``list --all`` all)
-    kind: dense                   # trial kind (trials.KINDS) or a user's importable module:function
+    kind: dense                   # trial kind (kinds.KINDS) or a user's importable module:function
     store: p1                     # optional store folder (specs that share trials share a store)
     preset: small                 # robot preset
     periods: 300                  # gait periods per trial (> 0)
@@ -19,12 +19,12 @@ A spec file is a mapping with these keys (every other key is refused, naming it)
     grid: {theta_deg: [0, 30]}    # parameter -> list of values; the trials are the product x seeds
                                   # (or a list of such blocks: the union of their products)
     seeds: 151                    # a count (0..n-1), a list, {start: 0, count: 151} or '1000..1150'
-    report: [p1, trajectories]    # report sections (report.SECTIONS)
+    report: [p1, trajectories]    # report sections (the kind's: ``kinds.report_sections``)
     paper: {fraction: 0.64}       # the paper's values the report sections compare with
 
-Grid keys may name physics, robot or noise fields as ``physics.time_step`` / ``robot.arm_mass`` /
-``noise.clock_rate_sd``. A spec without noise leaves ``noise`` out of the trial parameters, so its trial
-keys are those of a spec written before noise existed.
+Grid keys may name an entry of a kind's mapping parameter (its ``GROUPS``: physics, robot, noise, mujoco,
+chrono fields) as ``physics.time_step`` / ``robot.arm_mass`` / ``noise.clock_rate_sd``. A spec without noise
+leaves ``noise`` out of the trial parameters, so its trial keys are those of a spec written before noise existed.
 """
 
 from __future__ import annotations
@@ -41,14 +41,10 @@ from typing import Any
 
 import yaml
 
+from .configs import noise_mapping
 from .errors import SpecError
-from .configs import CHRONO_FIELDS, MUJOCO_FIELDS, NOISE_FIELDS, PHYSICS_FIELDS, ROBOT_FIELDS, noise_mapping
-from .trials import KINDS, resolve_kind, validate_params
-
-#: The sections a spec's ``report`` may name (``report.SECTIONS`` draws each; a test keeps the two equal).
-REPORT_SECTIONS: tuple[str, ...] = ('p1', 'trajectories', 'configurations', 'lifetimes', 'basin', 'alpha_sweep',
-                                    'p6', 'drift', 'accuracy', 'contacts', 'step_convergence',
-                                    'pair_paths')
+from .kind import TrialKind
+from .kinds import KINDS, report_sections, resolve_kind, trial_function, validate_params
 
 SPEC_KEYS: tuple[str, ...] = ('name', 'description', 'tags', 'status', 'kind', 'store', 'preset', 'periods',
                               'physics', 'robot', 'noise', 'params', 'analysis', 'grid', 'seeds', 'report', 'paper')
@@ -202,18 +198,28 @@ def _mapping(name: str, field_name: str, value: Any) -> dict[str, Any]:
     return dict(value)
 
 
-def _grid_block(name: str, kind: str, known: Any, block: Mapping[str, Any]) -> dict[str, list[Any]]:
+def groups_of(known: TrialKind[Any] | None) -> dict[str, frozenset[str]]:
+    """The mapping parameters a kind's grid keys ``group.name`` may set, with their names (a user's
+    ``module:function`` kind: every registered kind's groups)."""
+    if known is not None:
+        return dict(known.params.GROUPS)
+    out: dict[str, frozenset[str]] = {}
+    for kind in KINDS.values():
+        for group, names in kind.params.GROUPS.items():
+            out[group] = out.get(group, frozenset()) | names
+    return out
+
+
+def _grid_block(name: str, kind: str, known: TrialKind[Any] | None, block: Mapping[str, Any]) -> dict[str, list[Any]]:
     """One grid block (parameter -> non-empty list of values), checked against the kind's parameters."""
     grid: dict[str, list[Any]] = {}
+    groups = groups_of(known)
     for key, values in block.items():
         group, dot, leaf = str(key).partition('.')
         if dot:
-            allowed = {'physics': PHYSICS_FIELDS, 'robot': ROBOT_FIELDS, 'noise': NOISE_FIELDS,
-                       'mujoco': MUJOCO_FIELDS, 'chrono': CHRONO_FIELDS}.get(group)
-            unsupported = known is not None and group != 'noise' and group not in known.defaults
-            if allowed is None or leaf not in allowed or unsupported:
+            if leaf not in groups.get(group, ()):
                 raise SpecError(f'{name}: unknown key grid.{key} '
-                                f'(not a physics, robot, noise, mujoco or chrono setting of kind {kind!r})')
+                                f'(not a {", ".join(groups) or "grouped"} setting of kind {kind!r})')
         elif known is not None and (key not in known.defaults or key in ('physics', 'robot')):
             raise SpecError(f'{name}: unknown key grid.{key} for kind {kind!r}')
         if not isinstance(values, list):
@@ -275,8 +281,6 @@ def spec_from_mapping(data: Any, source: str = '') -> ExperimentSpec:
     except SpecError as exc:
         raise SpecError(f'{name}: {exc}') from None
     if known is None:
-        from .trials import trial_function
-
         try:
             trial_function(kind)   # a user's module:function must import here (and on the workers)
         except SpecError as exc:
@@ -290,12 +294,13 @@ def spec_from_mapping(data: Any, source: str = '') -> ExperimentSpec:
                 raise SpecError(f'{name}: unknown key {group}.{bad[0]} for kind {kind!r} '
                                 f'(known: {", ".join(k for k in known.defaults if k not in ("physics", "robot"))})')
         base.update({k: coerce(base.get(k), v) for k, v in values.items()})
-    for group, allowed in (('physics', PHYSICS_FIELDS), ('robot', ROBOT_FIELDS)):
+    groups = groups_of(None)
+    for group in ('physics', 'robot'):
         values = _mapping(name, group, data.get(group))
-        bad = sorted(set(values) - allowed)
+        bad = sorted(set(values) - groups[group])
         if bad:
             raise SpecError(f'{name}: unknown key {group}.{bad[0]} (not a {group} setting)')
-        if values and known is not None and group not in known.defaults:
+        if values and known is not None and group not in known.params.GROUPS:
             raise SpecError(f'{name}: {group} overrides are not supported by kind {kind!r}')
         if values or known is None or group in base:
             base[group] = values
@@ -304,6 +309,8 @@ def spec_from_mapping(data: Any, source: str = '') -> ExperimentSpec:
             noise = noise_mapping(data['noise'])
         except SpecError as exc:
             raise SpecError(f'{name}: {exc}') from None
+        if noise and known is not None and 'noise' not in known.params.GROUPS:
+            raise SpecError(f'{name}: noise is not supported by kind {kind!r}')
         if noise:
             base['noise'] = noise
     if 'preset' in data:
@@ -322,9 +329,11 @@ def spec_from_mapping(data: Any, source: str = '') -> ExperimentSpec:
     report = data.get('report') or []
     if not isinstance(report, list) or not all(isinstance(r, str) for r in report):
         raise SpecError(f'{name}: report must be a list of section names')
-    bad_sections = [r for r in report if r not in REPORT_SECTIONS]
+    sections = report_sections(kind)
+    bad_sections = [r for r in report if r not in sections]
     if bad_sections:
-        raise SpecError(f'{name}: unknown report section {bad_sections[0]!r} (known: {", ".join(REPORT_SECTIONS)})')
+        raise SpecError(f'{name}: unknown report section {bad_sections[0]!r} for kind {kind!r} '
+                        f'(known: {", ".join(sections) or "none"})')
     paper = _mapping(name, 'paper', data.get('paper'))
     store = data.get('store', name)
     if not isinstance(store, str) or not store or any(c in store for c in '/\\ '):

@@ -3,16 +3,15 @@ with which a spec of them is skipped when Chrono is not built, and (with the bui
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
 import pytest
 
 from smarticle_experiments.cli import main
 from smarticle_experiments.errors import SpecError
-from smarticle_experiments.harness import run_spec
+from smarticle_experiments.harness import RunOptions, run_spec
 from smarticle_experiments.spec import apply_point, load_spec, spec_from_mapping
-from smarticle_experiments.trials import CHRONO_KINDS, KINDS, engine_missing, run_kind
+from smarticle_experiments.kinds import CHRONO_KINDS, KINDS, engine_missing, run_kind
 from smarticle_sim.chrono_reference import DRIVER_ENV, chrono_available
 
 CHRONO_SPECS = ('pair_chrono_ring', 'single_chrono')
@@ -26,9 +25,9 @@ def no_chrono(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> Path:
     return missing
 
 
-def engine_args(out: Path) -> argparse.Namespace:
+def engine_args(out: Path) -> RunOptions:
     """The engine options of ``run`` (one worker, no progress bar)."""
-    return argparse.Namespace(out=out, scheduler=None, workers=1, retries=0, retry_failed=False, no_progress=True)
+    return RunOptions(out=out, workers=1, retries=0, progress=False)
 
 
 def test_chrono_kinds_are_built_in() -> None:
@@ -58,8 +57,9 @@ def test_spec_is_skipped_with_one_line_without_the_build(name: str, no_chrono: P
 
 def test_cli_run_skips_and_exits_zero(no_chrono: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(['run', 'single_chrono', '--out', str(tmp_path), '--workers', '1', '--no-progress']) == 0
-    lines = capsys.readouterr().out.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith('single_chrono: skipped, 4 trials not run: Chrono is not built')
+    plan, *rest = capsys.readouterr().out.strip().splitlines()   # the run's plan, then the one skip line
+    assert plan.startswith('single_chrono: 4 trials') and len(rest) == 1
+    assert rest[0].startswith('single_chrono: skipped, 4 trials not run: Chrono is not built')
 
 
 def test_chrono_settings_are_spec_fields() -> None:

@@ -51,7 +51,7 @@ def test_a_tiny_experiment_runs_end_to_end_resumes_and_repeats(tmp_path: Path,
     records = stored(first / 'tiny')
     assert len(records) == 2 and all(r['status'] == 'ok' for r in records.values())
     rec = next(iter(records.values()))
-    assert rec['code']['commit'] and rec['code']['pybullet'] and rec['code']['numpy']
+    assert rec['code']['source'] and rec['code']['pybullet'] and rec['code']['numpy']
     assert rec['result']['periods_run'] == pytest.approx(2.0)
     report = (first / 'tiny' / 'report-tiny' / 'report.md').read_text()
     assert '| P1 trials with an isolated pair bound >= 2 periods' in report and 'Wilson' in report

@@ -7,7 +7,7 @@ from smarticle_common.facts import GAIT_PERIOD
 from smarticle_experiments.estimate import (BULLET_SPEED, MUJOCO_SPEED, duration_text, run_seconds,
                                             trial_cpu_seconds)
 from smarticle_experiments.spec import load_spec, spec_from_mapping
-from smarticle_experiments.trials import KINDS
+from smarticle_experiments.kinds import KINDS
 
 
 def test_a_trial_costs_robot_seconds_over_the_engines_speed() -> None:

@@ -10,7 +10,7 @@ import pytest
 from smarticle_experiments.cli import main
 from smarticle_experiments.errors import SpecError
 from smarticle_experiments.physics_study import split_settings, study_config
-from smarticle_experiments.trials import KINDS, run_kind
+from smarticle_experiments.kinds import KINDS, run_kind
 
 
 def test_a_lone_robots_drift_run_takes_the_amplitude_and_reports_the_bodys_tilt() -> None:

@@ -138,11 +138,13 @@ def test_drift_is_reported_per_amplitude_and_per_other_grid_setting(tmp_path: Pa
     assert (tmp_path / 'amp' / 'report-amp' / 'drift.png').stat().st_size > 0
 
 
-def test_every_section_a_spec_may_name_is_drawn() -> None:
+def test_the_report_draws_every_section_a_built_in_kind_feeds_and_no_other() -> None:
+    from smarticle_experiments.kinds import KINDS
     from smarticle_experiments.report import SECTIONS
-    from smarticle_experiments.spec import REPORT_SECTIONS
 
-    assert set(SECTIONS) == set(REPORT_SECTIONS)
+    fed = {s for kind in KINDS.values() if kind.modules[0].startswith('smarticle_experiments.kinds.')
+           for s in kind.all_sections()}
+    assert fed == set(SECTIONS)
 
 
 def test_seeds_are_listed_as_runs() -> None:

@@ -8,7 +8,7 @@ import json
 import pytest
 
 from smarticle_experiments.spec import apply_point
-from smarticle_experiments.trials import KINDS, run_kind
+from smarticle_experiments.kinds import KINDS, run_kind
 
 
 def params(kind: str, **changes: object) -> dict:

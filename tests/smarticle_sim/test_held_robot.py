@@ -10,7 +10,7 @@ import pytest
 from smarticle_common.gait import GaitConfig, open_loop_angles
 
 from smarticle_experiments.errors import SpecError
-from smarticle_experiments.trials import KINDS, run_kind, validate_params
+from smarticle_experiments.kinds import KINDS, run_kind, validate_params
 from smarticle_sim.batch import run_trial
 from smarticle_sim.errors import SimError
 from smarticle_sim.mujoco_engine import MujocoSettings, run_mujoco

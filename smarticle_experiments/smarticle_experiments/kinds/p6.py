@@ -1,0 +1,63 @@
+"""The ``p6`` kind (P6): a C2 pair of the feedback robot, open loop or with impact-halt feedback
+(``smarticle_experiments.p6`` runs it)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from typing import Any, ClassVar
+
+from smarticle_sim.settings import NoiseConfig
+
+from ..configs import NOISE_FIELDS, PHYSICS_FIELDS, ROBOT_FIELDS, make_config, make_gait, noise_mapping
+from ..kind import KINDS, KindParams, optional
+from ..p6 import START_NAMES, Condition, run_pair_trial, start_base, windows_config
+from ..results import P6Result
+from ..trials import finite
+
+
+@dataclass(frozen=True)
+class P6Params(KindParams):
+    """A C2 pair of the feedback robot (its preset with ``physics`` / ``robot`` overrides) from the start
+    ``start``, open loop or with feedback (``windows``: feedback parameters replacing the shipped impact
+    windows; ``details``: the bound run's travel and the periods with contact, a step hook)."""
+
+    GROUPS: ClassVar[Mapping[str, frozenset[str]]] = {'physics': PHYSICS_FIELDS, 'robot': ROBOT_FIELDS,
+                                                      'noise': NOISE_FIELDS}
+
+    periods: float = 100.0
+    alpha_max_deg: float = 90.0
+    feedback: bool = False
+    start: str = 'harvested'                                    # one of p6.START_NAMES
+    physics: Mapping[str, Any] = field(default_factory=dict)
+    robot: Mapping[str, Any] = field(default_factory=dict)
+    windows: Mapping[str, Any] = field(default_factory=dict)
+    details: bool = False
+    noise: Mapping[str, Any] | None = optional()
+
+    def check(self) -> None:
+        """A known start, noise, config, gait and windows."""
+        if self.start not in START_NAMES:
+            raise ValueError(f'params.start must be one of {", ".join(START_NAMES)}, got {self.start!r}')
+        replace(NoiseConfig.none(), **noise_mapping(self.noise))
+        config = make_config('feedback', dict(self.physics or {}), dict(self.robot or {}))
+        make_gait(config, self.alpha_max_deg)
+        if self.windows:
+            windows_config(self.windows)
+
+
+@KINDS.register('p6', P6Params, 'C2 pair of the feedback robot, open loop or feedback (P6; smarticle_experiments.p6)',
+                result=P6Result, sections=('p6',))
+def p6_trial(p: P6Params, seed: int) -> P6Result:
+    """P6: a C2 pair of the feedback robot, open loop or with impact-halt feedback (the feedback package's trial)."""
+    noise = replace(NoiseConfig.none(), **noise_mapping(p.noise)) if p.noise else None
+    details = bool(p.details)
+    trial = run_pair_trial(Condition(float(p.alpha_max_deg), bool(p.feedback)), seed, float(p.periods),
+                           feedback=windows_config(p.windows) if p.windows else None,
+                           base=start_base(str(p.start)), noise=noise, count_contacts=details,
+                           robot_changes=dict(p.robot or {}), physics_changes=dict(p.physics or {}))
+    return P6Result(lifetime_periods=int(trial.lifetime_periods), censored=bool(trial.censored),
+                    halts=len(trial.halts), trouble=trial.trouble, r0_bl=trial.start[0], theta0_deg=trial.start[1],
+                    phi0_deg=trial.start[2], final_r_bl=finite(float(trial.r[-1])) if len(trial.r) else None,
+                    travel_w=trial.travel_w if details else None,
+                    contact_periods=[int(q) for q in trial.contact_periods] if details else None)
