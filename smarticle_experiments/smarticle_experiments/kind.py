@@ -83,6 +83,16 @@ class KindParams:
         return out
 
     @classmethod
+    def checked_before(cls: type[P], data: Mapping[str, Any]) -> P:
+        """The typed parameters of a stored mapping checked before (a spec's trial), without checking them again
+        (no config is built, no warning repeated)."""
+        out = object.__new__(cls)
+        defaults = cls.defaults()
+        for f in fields(cls):
+            object.__setattr__(out, f.name, data[f.name] if f.name in data else defaults.get(f.name))
+        return out
+
+    @classmethod
     def from_mapping(cls: type[P], data: Mapping[str, Any]) -> P:
         """The typed parameters of a stored mapping; SpecError names an unknown parameter or a bad value."""
         unknown = [k for k in data if k not in cls.names()]
@@ -120,6 +130,8 @@ class TrialKind(Generic[P]):
     writers: Mapping[str, SectionWriter] = field(default_factory=dict)
     #: Why it cannot run on this machine (one line), or None if it can: e.g. the engine is not built.
     unavailable: Callable[[], str | None] | None = None
+    #: CPU seconds of one trial of these typed parameters by the cost model (``cost_model``); None: no estimate.
+    cost: Callable[[Any], float | None] | None = None
     #: The project modules whose code its run runs (its own module by default; ``trial_code`` follows their
     #: imports).
     modules: tuple[str, ...] = ()
@@ -144,6 +156,10 @@ class TrialKind(Generic[P]):
     def all_sections(self) -> tuple[str, ...]:
         """The report sections a spec of this kind may name: the report's and its own."""
         return (*self.sections, *(s for s in self.writers if s not in self.sections))
+
+    def cpu_seconds(self, data: Mapping[str, Any]) -> float | None:
+        """CPU seconds of one trial of the stored parameters ``data`` by the cost model (None: no estimate)."""
+        return None if self.cost is None else self.cost(self.params.checked_before(data))
 
     def read(self, data: Mapping[str, Any]) -> Any:
         """A stored result as its typed record (a start that did not run: ``inadmissible``), or the dict for a

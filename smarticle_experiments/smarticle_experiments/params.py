@@ -42,6 +42,10 @@ class SimParams(KindParams):
         """The trial's square gait on ``config``'s robot."""
         return make_gait(config, self.alpha_max_deg, self.servo_speed)
 
+    def time_step(self) -> float | None:
+        """The physics time step the spec sets (None: the shipped one)."""
+        return dict(self.physics or {}).get('time_step')
+
     def check(self) -> None:
         """A valid SimConfig and gait."""
         self.gait(self.config())

@@ -9,8 +9,11 @@ from typing import Any
 
 import numpy as np
 from smarticle_sim.batch import run_trial
+from smarticle_common.facts import GAIT_PERIOD
 from smarticle_sim.scenes import pair_scene
+from smarticle_sim.settings import PhysicsConfig
 
+from ..cost_model import BULLET_SPEED
 from ..kind import KINDS
 from ..params import SimParams
 from ..results import AccuracyResult
@@ -49,8 +52,15 @@ class AccuracyParams(SimParams):
                             servo_speed=self.servo_speed, noise=self.noise, sample_every=1)
 
 
+def accuracy_cpu_seconds(p: AccuracyParams) -> float:
+    """The pair's and the lone robot's robot-seconds at this setting's rate, by Bullet's speed."""
+    step = PhysicsConfig().time_step * float(p.rate_hz)
+    robot_s = (2.0 * float(p.periods) + float(p.single_periods)) * GAIT_PERIOD
+    return robot_s * step / BULLET_SPEED
+
+
 @KINDS.register('accuracy', AccuracyParams, 'run time against error of one physics setting (pair + lone robot)',
-                result=AccuracyResult, sections=('accuracy',))
+                result=AccuracyResult, sections=('accuracy',), cost=lambda p: accuracy_cpu_seconds(p))
 def accuracy_trial(p: AccuracyParams, seed: int) -> AccuracyResult:
     """Run time against error: one (physics rate, solver iterations) setting on a pair and a lone robot.
 

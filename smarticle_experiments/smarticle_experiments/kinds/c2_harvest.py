@@ -6,6 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..c2_harvest import harvest_recording, sample_record
+from ..cost_model import sim_cpu_seconds
 from ..configs import make_config, make_gait
 from ..kind import KINDS, KindParams
 from ..results import C2HarvestResult
@@ -31,7 +32,7 @@ class C2HarvestParams(KindParams):
 
 @KINDS.register('c2_harvest', C2HarvestParams,
                 'dense open-loop feedback robots: where their C2 gliders sit (smarticle_experiments.c2_harvest)',
-                result=C2HarvestResult)
+                result=C2HarvestResult, cost=lambda p: sim_cpu_seconds(int(p.robots), p.periods))
 def c2_harvest_trial(p: C2HarvestParams, seed: int) -> C2HarvestResult:
     """A dense open-loop trial of the feedback robot (in phase, as the paper's collectives start): every C2
     glider of at least ``min_periods`` sampled at its period boundaries after ``settle`` periods, with the

@@ -8,6 +8,7 @@ from smarticle_sim.batch import run_trial
 from smarticle_sim.runner import ContactPeriods
 from smarticle_sim.scenes import dense_scene
 
+from ..cost_model import sim_cpu_seconds
 from ..kind import KINDS
 from ..params import GliderParams
 from ..results import DenseResult
@@ -31,7 +32,8 @@ class DenseParams(GliderParams):
 
 
 @KINDS.register('dense', DenseParams, 'N robots densely packed (P1, P2, P3)', result=DenseResult,
-                sections=('p1', 'trajectories', 'configurations', 'lifetimes', 'contacts'))
+                sections=('p1', 'trajectories', 'configurations', 'lifetimes', 'contacts'),
+                cost=lambda p: sim_cpu_seconds(int(p.robots), p.periods, time_step=p.time_step()))
 def dense_trial(p: DenseParams, seed: int) -> DenseResult:
     """P1/P2/P3: N robots densely packed, in phase (or jittered), for ``periods`` periods; its gliders."""
     config = p.config()

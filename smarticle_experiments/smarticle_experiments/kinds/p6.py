@@ -10,6 +10,7 @@ from typing import Any, ClassVar
 from smarticle_sim.settings import NoiseConfig
 
 from ..configs import NOISE_FIELDS, PHYSICS_FIELDS, ROBOT_FIELDS, make_config, make_gait, noise_mapping
+from ..cost_model import sim_cpu_seconds
 from ..kind import KINDS, KindParams, optional
 from ..p6 import START_NAMES, Condition, run_pair_trial, start_base, windows_config
 from ..results import P6Result
@@ -47,7 +48,8 @@ class P6Params(KindParams):
 
 
 @KINDS.register('p6', P6Params, 'C2 pair of the feedback robot, open loop or feedback (P6; smarticle_experiments.p6)',
-                result=P6Result, sections=('p6',))
+                result=P6Result, sections=('p6',),
+                cost=lambda p: sim_cpu_seconds(2, p.periods, time_step=dict(p.physics or {}).get('time_step')))
 def p6_trial(p: P6Params, seed: int) -> P6Result:
     """P6: a C2 pair of the feedback robot, open loop or with impact-halt feedback (the feedback package's trial)."""
     noise = replace(NoiseConfig.none(), **noise_mapping(p.noise)) if p.noise else None

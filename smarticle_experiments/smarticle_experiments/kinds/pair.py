@@ -16,6 +16,7 @@ from smarticle_sim.mujoco_engine import MujocoSettings, run_mujoco
 from smarticle_sim.runner import ContactPeriods
 from smarticle_sim.scenes import pair_scene
 
+from ..cost_model import sim_cpu_seconds
 from ..kind import KINDS
 from ..params import GliderParams, SimParams
 from ..results import InadmissiblePairResult, PairResult
@@ -51,6 +52,10 @@ class MujocoParams(SimParams):
 
     mujoco: Mapping[str, Any] = field(default_factory=dict)
 
+    def time_step(self) -> float | None:
+        """MuJoCo's time step the spec sets (None: the shipped one)."""
+        return dict(self.mujoco or {}).get('time_step')
+
     def check(self) -> None:
         """A valid config, gait and MujocoSettings; no held robot (MuJoCo has none)."""
         super().check()
@@ -69,7 +74,8 @@ class PairMujocoParams(PairParams, MujocoParams):
 
 
 @KINDS.register('pair', PairParams, 'two robots from pair coordinates (P4 basin scan, P5 alpha_max sweep)',
-                result=PairResult, inadmissible=InadmissiblePairResult, sections=PAIR_SECTIONS)
+                result=PairResult, inadmissible=InadmissiblePairResult, sections=PAIR_SECTIONS,
+                cost=lambda p: sim_cpu_seconds(2, p.periods, time_step=p.time_step()))
 def pair_trial(p: PairParams, seed: int) -> PairResult | InadmissiblePairResult:
     """P4/P5: two robots from pair coordinates; binding at the end, travel, and the pair's gliders.
     ``hold_first``: robot 1's body held in place, its arms still following the gait (P4 read literally)."""
@@ -78,7 +84,8 @@ def pair_trial(p: PairParams, seed: int) -> PairResult | InadmissiblePairResult:
 
 @KINDS.register('pair_mujoco', PairMujocoParams,
                 'the pair kind stepped by MuJoCo (cross-engine check; smarticle_sim.mujoco_engine)',
-                result=PairResult, inadmissible=InadmissiblePairResult, engines=('mujoco',), sections=PAIR_SECTIONS)
+                result=PairResult, inadmissible=InadmissiblePairResult, engines=('mujoco',), sections=PAIR_SECTIONS,
+                cost=lambda p: sim_cpu_seconds(2, p.periods, 'mujoco', p.time_step()))
 def pair_mujoco_trial(p: PairMujocoParams, seed: int) -> PairResult | InadmissiblePairResult:
     """The pair kind's trial stepped by MuJoCo instead of Bullet (``smarticle_sim.mujoco_engine``): the same
     robots, start and gait; soft contacts with an isotropic friction cone. ``mujoco`` sets ``MujocoSettings``

@@ -11,6 +11,7 @@ from smarticle_sim.batch import run_trial
 from smarticle_sim.mujoco_engine import MujocoSettings, run_mujoco
 from smarticle_sim.scenes import RobotPlacement, Scene
 
+from ..cost_model import sim_cpu_seconds
 from ..kind import KINDS
 from ..params import SimParams
 from ..results import SingleResult
@@ -31,14 +32,15 @@ class SingleMujocoParams(SingleParams, MujocoParams):
 
 
 @KINDS.register('single', SingleParams, 'one robot alone, drift per cycle (P7)', result=SingleResult,
-                sections=('drift',))
+                sections=('drift',), cost=lambda p: sim_cpu_seconds(1, p.periods, time_step=p.time_step()))
 def single_trial(p: SingleParams, seed: int) -> SingleResult:
     """P7: one robot alone (heading drawn from the seed); drift per cycle in micrometres."""
     return _single(p, seed, None)
 
 
 @KINDS.register('single_mujoco', SingleMujocoParams, 'the single kind stepped by MuJoCo (cross-engine check)',
-                result=SingleResult, engines=('mujoco',), sections=('drift',))
+                result=SingleResult, engines=('mujoco',), sections=('drift',),
+                cost=lambda p: sim_cpu_seconds(1, p.periods, 'mujoco', p.time_step()))
 def single_mujoco_trial(p: SingleMujocoParams, seed: int) -> SingleResult:
     """The single kind's trial stepped by MuJoCo (``mujoco`` sets ``MujocoSettings`` fields)."""
     return _single(p, seed, MujocoSettings(**dict(p.mujoco or {})))

@@ -9,6 +9,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from ..cost_model import IMPACT_TRIAL_S, sim_cpu_seconds
 from ..kind import KINDS, KindParams
 from ..physics_study import (StudyRow, dt_inv, study_collision_trial, study_config, study_dense_trial,
                              study_drift_trial, study_impact_trial, study_pair_trial)
@@ -22,6 +23,10 @@ class StudyParams(KindParams):
 
     settings: Mapping[str, Any] = field(default_factory=dict)
     label: str = 'shipped'
+
+    def time_step(self) -> float | None:
+        """The time step the settings set (None: the shipped one)."""
+        return dict(self.settings or {}).get('time_step')
 
     def check(self) -> None:
         """Known settings that make a valid config."""
@@ -81,14 +86,15 @@ class ImpactParams(StudyParams):
 
 @KINDS.register('study_collision', CollisionParams,
                 'physics study: a pair with every contact impulse measured (collision mechanism)',
-                result=StudyCollisionResult, inadmissible=StudyInadmissibleResult)
+                result=StudyCollisionResult, inadmissible=StudyInadmissibleResult,
+                cost=lambda p: sim_cpu_seconds(2, p.periods, time_step=p.time_step()))
 def study_collision(p: CollisionParams, seed: int) -> StudyCollisionResult | StudyInadmissibleResult:
     """``physics_study.study_collision_trial``."""
     return study_collision_trial(p.as_dict(), seed)
 
 
 @KINDS.register('study_drift', DriftParams, 'physics study: a lone robot\'s drift per cycle and tilt, tick by tick',
-                result=StudyDriftResult)
+                result=StudyDriftResult, cost=lambda p: sim_cpu_seconds(1, p.periods, time_step=p.time_step()))
 def study_drift(p: DriftParams, seed: int) -> StudyDriftResult:
     """``physics_study.study_drift_trial``."""
     return study_drift_trial(p.as_dict(), seed)
@@ -96,21 +102,23 @@ def study_drift(p: DriftParams, seed: int) -> StudyDriftResult:
 
 @KINDS.register('study_pair', StudyPairParams,
                 'physics study: a pair\'s contact per period, touching run, r and travel',
-                result=StudyPairResult, inadmissible=StudyInadmissibleResult)
+                result=StudyPairResult, inadmissible=StudyInadmissibleResult,
+                cost=lambda p: sim_cpu_seconds(2, p.periods, time_step=p.time_step()))
 def study_pair(p: StudyPairParams, seed: int) -> StudyPairResult | StudyInadmissibleResult:
     """``physics_study.study_pair_trial``."""
     return study_pair_trial(p.as_dict(), seed)
 
 
 @KINDS.register('study_dense', StudyDenseParams, 'physics study: dense stability (trouble, overlap) and gliders',
-                result=StudyDenseResult)
+                result=StudyDenseResult,
+                cost=lambda p: sim_cpu_seconds(int(p.robots), p.periods, time_step=p.time_step()))
 def study_dense(p: StudyDenseParams, seed: int) -> StudyDenseResult:
     """``physics_study.study_dense_trial``."""
     return study_dense_trial(p.as_dict(), seed)
 
 
 @KINDS.register('study_impact', ImpactParams, 'physics study: effective restitution of head-on impacts',
-                result=StudyImpactResult)
+                result=StudyImpactResult, cost=lambda p: IMPACT_TRIAL_S * float(p.phases) / 16.0)
 def study_impact(p: ImpactParams, seed: int) -> StudyImpactResult:
     """``physics_study.study_impact_trial``."""
     return study_impact_trial(p.as_dict(), seed)
