@@ -222,7 +222,8 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
                    base: tuple[float, float, float, tuple[float, float]] | str = C2_START,
                    r_bind_bl: float = R_BIND_BL, sample_every: int = 3, record_samples: bool = False,
                    robot_changes: Mapping[str, float] | None = None, count_contacts: bool = False,
-                   noise: Any = None, physics_changes: Mapping[str, Any] | None = None) -> PairTrial:
+                   noise: Any = None, physics_changes: Mapping[str, Any] | None = None,
+                   engine: Any = None) -> PairTrial:
     """Run one C2 pair for ``periods`` gait periods, with the impact controller when ``condition.feedback``.
 
     ``robot_changes`` replaces fields of the preset's ``RobotSpec`` (the sensitivity study of the assumed values),
@@ -231,6 +232,7 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
     (``PairTrial.contact_periods``; a step hook, the trajectory is the same).
     ``noise`` is a ``NoiseConfig`` (None: off); its draws take the trial ``seed`` unless it names its own.
     ``base`` is a start's pair coordinates (``STARTS``) or ``HELD``: the full state of a held C2 (``held_scene``).
+    ``engine`` builds the world (``smarticle_sim.engines.engine_factory``; None: Bullet).
     """
     from smarticle_sim.batch import run_trial
     from smarticle_sim.physics import Physics
@@ -265,7 +267,7 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
         return [*extra, *feedback_controllers]
 
     recording = run_trial(config, scene, periods, sample_every=sample_every, controllers=add_feedback,
-                          start_time=start_time)
+                          start_time=start_time, engine=engine)
     trial = PairTrial(condition, seed, recording.time, np.empty(0), np.empty(0), start=(r, theta, phi),
                       trouble=recording.trouble)
     if counter is not None:
