@@ -1,4 +1,4 @@
-"""Tracking of smarticles: ArUco tags to planar poses, the glider analysis, MSD, the camera calibration."""
+"""Tracking of smarticles: ArUco tags to planar poses, the glider analysis, MSD, the camera calibration, gait clocks."""
 
 from __future__ import annotations
 
@@ -16,7 +16,8 @@ _EXPORTS: dict[str, str] = {
     'TrackingError': 'errors', 'GliderError': 'errors', 'GliderInputError': 'errors', 'GliderConfigError': 'errors',
     'MsdFitError': 'errors', 'TrackerError': 'errors', 'TrackerConfigError': 'errors',
     'TrackerInputError': 'errors', 'CameraCalibrationError': 'errors', 'FrameEncodingError': 'errors',
-    'FrameSizeError': 'errors',
+    'FrameSizeError': 'errors', 'ClockError': 'errors',
+    'ClockEstimate': 'clocks', 'estimate_clock': 'clocks', 'fit_clock': 'clocks',
 }
 __all__ = sorted(_EXPORTS)
 

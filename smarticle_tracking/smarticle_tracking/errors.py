@@ -45,3 +45,7 @@ class FrameEncodingError(TrackerInputError):
 
 class FrameSizeError(TrackerInputError):
     """A frame whose size differs from the calibration's."""
+
+
+class ClockError(TrackingError):
+    """Arm data from which no gait clock can be estimated (too few quarter boundaries, no motion)."""

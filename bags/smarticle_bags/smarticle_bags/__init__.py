@@ -2,7 +2,8 @@
 
 Pure cores (no rclpy): ``writer`` (bag folders), ``mcapfile`` (crash-tolerant .mcap scanning),
 ``reader`` (raw and decoded messages), ``arrays`` (NumPy per topic), ``reindex``, ``playback``
-(timing), ``selection`` (topic choice and remapping). ROS shells: ``recorder_node``, ``player_node``.
+(timing), ``selection`` (topic choice and remapping), ``csv_import`` (other trackers' CSV tracks).
+ROS shells: ``recorder_node``, ``player_node``.
 """
 
 from __future__ import annotations
@@ -16,7 +17,8 @@ _EXPORTS: dict[str, str] = {
     'start_recording': 'recording',
     'BagError': 'errors', 'BagNotFoundError': 'errors', 'MetadataError': 'errors', 'CorruptBagError': 'errors',
     'BagExistsError': 'errors', 'MessageDefinitionError': 'errors', 'TopicSelectionError': 'errors',
-    'OptionError': 'errors',
+    'OptionError': 'errors', 'CsvImportError': 'errors',
+    'ImportSpec': 'csv_import', 'read_tracks': 'csv_import', 'write_bag': 'csv_import',
 }
 __all__ = sorted(_EXPORTS)
 

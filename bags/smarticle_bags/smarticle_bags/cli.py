@@ -1,9 +1,10 @@
-"""``smarticle-bag``: info, record, play, analyze, export and reindex, with ``ros2 bag``'s flag names."""
+"""``smarticle-bag``: info, record, play, analyze, export, reindex, import and clocks (``ros2 bag``'s flag names)."""
 
 from __future__ import annotations
 
 import argparse
 import logging
+import math
 import sys
 from pathlib import Path
 from typing import Any
@@ -90,6 +91,61 @@ def _add_play(sub: Any) -> None:
                    help='wait this many seconds before playing (lets subscribers connect)')
 
 
+def _add_import(sub: Any) -> None:
+    """Add the ``import`` subcommand."""
+    p = sub.add_parser('import', help='turn a CSV of tracks from another tracker into a bag of /smarticles/poses',
+                       description='Import a CSV of robot tracks (motion capture, AprilTag or ArUco pixel '
+                                   'tracks) as the stack\'s pose topic, so that info, analyze and '
+                                   'smarticle-calibrate read it. Name the time column and each robot\'s x, y '
+                                   'and heading columns; other columns are ignored. A missing value makes that '
+                                   'robot unseen in that message and a long time step is reported as a gap: '
+                                   'neither is filled in. Headings may be wrapped or unwrapped (read modulo a '
+                                   'full turn). A cell that is not a number, a missing time or times that do '
+                                   'not increase: one line each, exit code 2.')
+    p.add_argument('csv', type=Path, help='CSV file with a header line naming the columns')
+    p.add_argument('-o', '--output', required=True, type=Path, help='bag folder to create')
+    p.add_argument('--time', required=True, metavar='COLUMN', help='the column of times')
+    p.add_argument('--robot', action='append', default=[], metavar='K:X,Y,H',
+                   help='robot id K and its x, y and heading columns (repeat per robot), e.g. 0:x0,y0,h0')
+    p.add_argument('--pattern', default=None, metavar='X,Y,H',
+                   help='every robot k whose columns match this pattern, e.g. "x{k},y{k},h{k}" or '
+                        '"tag{k}_x,tag{k}_y,tag{k}_yaw"')
+    p.add_argument('--unit', choices=['m', 'cm', 'mm', 'px'], default=None,
+                   help='length unit of x and y (default m; px with --px-per-bl)')
+    p.add_argument('--px-per-bl', type=float, default=None, metavar='N',
+                   help='pixel tracks: pixels per body length W (W of --robot-preset)')
+    p.add_argument('--robot-preset', default='small', choices=['small', 'feedback'],
+                   help='the robot whose W scales pixel lengths (default small: 5.4 cm; feedback: 6.5 cm)')
+    p.add_argument('--angle', choices=['rad', 'deg'], default='rad', help='unit of the heading column (default rad)')
+    p.add_argument('--heading-offset', type=float, default=0.0, metavar='DEG',
+                   help='degrees added to every heading, when the tracker\'s zero is not the body normal')
+    p.add_argument('--y-down', action='store_true',
+                   help='the tracker\'s y axis points down (image rows): y and headings are mirrored')
+    p.add_argument('--time-unit', choices=['s', 'ms', 'us', 'ns'], default='s', help='unit of the time column')
+    p.add_argument('--time-offset', type=float, default=0.0, metavar='S',
+                   help='seconds added to every time (the bag\'s times must be >= 0)')
+    p.add_argument('--gap-factor', type=float, default=3.0, metavar='X',
+                   help='report a time step longer than X median steps as a gap (default 3)')
+    p.add_argument('--delimiter', default=None, help='cell delimiter (default: sniffed from the header: , ; or tab)')
+    p.add_argument('--skip-rows', type=int, default=0, metavar='N',
+                   help='lines before the header line to skip (an exporter\'s preamble)')
+
+
+def _add_clocks(sub: Any) -> None:
+    """Add the ``clocks`` subcommand."""
+    p = sub.add_parser('clocks', help='each robot\'s gait clock rate and phase, from its joint commands or states',
+                       description='Estimate each robot\'s gait clock from the square gait\'s quarter '
+                                   'boundaries in a bag: the times its joint commands switch corners (or its '
+                                   'arms pass the middle of a stroke, from joint states), fitted against the '
+                                   'quarter index. Prints per robot the rate (nominal period / fitted period) '
+                                   'with its 95 %% interval and the gait phase at the bag\'s start.')
+    p.add_argument('bag', help='bag folder or .mcap file')
+    p.add_argument('--source', choices=['auto', 'commands', 'states'], default='auto',
+                   help='joint_commands, joint_states, or auto: commands where recorded, else states')
+    p.add_argument('--period', type=float, default=GAIT_PERIOD,
+                   help=f'the gait\'s nominal period (s) (default {GAIT_PERIOD:g})')
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Return the argument parser of ``smarticle-bag``."""
     parser = argparse.ArgumentParser(prog=PROG, description='Record, replay and analyse rosbag2-compatible '
@@ -140,6 +196,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help='repair in place; each damaged original is kept as <name>.mcap.damaged')
     p.add_argument('-o', '--output', type=Path, default=None,
                    help='folder for the repaired bag (default <bag>.repaired)')
+    _add_import(sub)
+    _add_clocks(sub)
     return parser
 
 
@@ -206,6 +264,104 @@ def _analyze(ns: argparse.Namespace) -> int:
     return 0
 
 
+def _import(ns: argparse.Namespace) -> int:
+    """Turn a CSV of tracks into a bag of the stack's pose topic; report gaps, refuse bad rows."""
+    from .csv_import import ImportSpec, parse_robot, read_header, read_tracks, robots_from_pattern, write_bag
+    from .errors import CsvImportError, OptionError
+
+    try:
+        if ns.skip_rows < 0:
+            raise OptionError(f'--skip-rows must be >= 0, got {ns.skip_rows}')
+        if bool(ns.robot) == bool(ns.pattern):
+            raise OptionError('name the robots\' columns with --robot K:X,Y,H (once per robot) or --pattern X,Y,H')
+        if ns.pattern:
+            header, _ = read_header(ns.csv, ns.delimiter, ns.skip_rows)
+            robots = robots_from_pattern(ns.pattern, header)
+        else:
+            robots = tuple(parse_robot(text) for text in ns.robot)
+        unit = ns.unit or ('px' if ns.px_per_bl is not None else 'm')
+        spec = ImportSpec(time=ns.time, robots=robots, length_unit=unit, px_per_bl=ns.px_per_bl,
+                          body_preset=ns.robot_preset, angle_unit=ns.angle, time_unit=ns.time_unit,
+                          time_offset=ns.time_offset, heading_offset=math.radians(ns.heading_offset),
+                          y_down=ns.y_down, gap_factor=ns.gap_factor)
+        tracks = read_tracks(ns.csv, spec, ns.delimiter, ns.skip_rows)
+    except CsvImportError as err:
+        for line in err.problems:
+            print(f'{PROG} import: error: {line}', file=sys.stderr)
+        return 2
+    except UnicodeDecodeError as err:
+        print(f'{PROG} import: error: {ns.csv.name} is not a UTF-8 text file ({err.reason} at byte {err.start})',
+              file=sys.stderr)
+        return 2
+    for line in tracks.gaps:
+        print(f'{PROG} import: gap: {line}', file=sys.stderr)
+    info = write_bag(tracks, ns.output, spec, ns.csv.name)
+    print(f'wrote {ns.output}: {len(tracks.time)} /smarticles/poses messages, robots '
+          f'{", ".join(str(r.robot) for r in spec.robots)}, t = {tracks.time[0]:.6g} to {tracks.time[-1]:.6g} s '
+          f'({info.message_count} messages)')
+    print(f'units: {spec.describe_units()}')
+    print(f'gaps: {len(tracks.gaps)} (listed above; not filled in)' if tracks.gaps else 'gaps: none')
+    return 0
+
+
+def _gait_start(reader: Any) -> tuple[float | None, str]:
+    """The stamp of the bag's last /smarticles/start (the gaits' shared start), or None if it holds none."""
+    from smarticle_common import topics as contract
+
+    topic = contract.topic('start')
+    if topic not in reader.topics:
+        return None, ''
+    stamps = [msg.stamp.sec + 1e-9 * msg.stamp.nanosec for _, msg in reader.decoded([topic])]
+    return (stamps[-1], f'the gait start ({topic})') if stamps else (None, '')
+
+
+def _clocks(ns: argparse.Namespace) -> int:
+    """Print each robot's gait clock rate (with its 95 % interval) and phase at the bag's start."""
+    try:
+        from smarticle_tracking.clocks import ClockError, estimate_clock, format_clocks
+    except ImportError as err:
+        print(f'{PROG} clocks: the clock estimate (smarticle_tracking) is not available ({err})', file=sys.stderr)
+        return 3
+    from . import arrays
+    from .reader import BagReader
+
+    if not (math.isfinite(ns.period) and ns.period > 0.0):
+        print(f'{PROG} clocks: --period must be a positive number of seconds, got {ns.period}', file=sys.stderr)
+        return 2
+    reader = BagReader(ns.bag)
+    sources = {'commands': ['joint_commands'], 'states': ['joint_states'],
+               'auto': ['joint_commands', 'joint_states']}[ns.source]
+    series = {key: arrays.read_robot_topic(reader, key) for key in sources}
+    robots = sorted({k for found in series.values() for k in found})
+    if not robots:
+        topics = ' or '.join(f'/smarticle_<k>/{key}' for key in sources)
+        print(f'{PROG} clocks: {ns.bag} holds no {topics}: nothing to estimate', file=sys.stderr)
+        return 2
+    start, where = _gait_start(reader)
+    if start is None:
+        stamps = [s.stamp[0] for found in series.values() for s in found.values() if len(s.stamp)]
+        start, where = min(stamps), 'the first joint message'
+    estimates, failures = [], []
+    for k in robots:
+        key = next(key for key in sources if k in series[key] and len(series[key][k].stamp) > 1)
+        joints = series[key][k]
+        if not {'arm1', 'arm2'} <= set(joints.names):
+            failures.append(f'robot {k}: /smarticle_{k}/{key} names {", ".join(joints.names) or "no joint"}, '
+                            'not arm1 and arm2')
+            continue
+        arms = [joints.names.index(n) for n in ('arm1', 'arm2')]
+        try:
+            estimates.append(estimate_clock(
+                joints.stamp, joints.position[:, arms], kind='commands' if key == 'joint_commands' else 'states',
+                period=ns.period, start=start, velocity=joints.velocity[:, arms], robot=k))
+        except ClockError as err:
+            failures.append(f'robot {k} ({key}): {err}')
+    print(format_clocks(estimates, ns.period, start, where))
+    for line in failures:
+        print(f'{PROG} clocks: {line}', file=sys.stderr)
+    return 0 if estimates else 2
+
+
 @closed_pipe_safe
 def main(argv: list[str] | None = None) -> None:
     """Entry point of ``smarticle-bag``."""
@@ -234,6 +390,10 @@ def _dispatch(ns: argparse.Namespace, ros_args: list[str] | None) -> int:
         return _play(ns, ros_args)
     if ns.command == 'analyze':
         return _analyze(ns)
+    if ns.command == 'import':
+        return _import(ns)
+    if ns.command == 'clocks':
+        return _clocks(ns)
     if ns.command == 'info':
         from .info import format_info
         print(format_info(BagReader(ns.bag, strict=ns.strict)), end='')

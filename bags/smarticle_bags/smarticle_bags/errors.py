@@ -33,3 +33,11 @@ class TopicSelectionError(BagError, ValueError):
 
 class OptionError(BagError, ValueError):
     """A recording or playback option that makes no sense (a rate <= 0, a negative duration...)."""
+
+
+class CsvImportError(BagError, ValueError):
+    """A CSV of tracks that cannot be imported: ``problems`` holds one line per bad row or column."""
+
+    def __init__(self, problems: list[str]) -> None:
+        super().__init__('\n'.join(problems))
+        self.problems = list(problems)

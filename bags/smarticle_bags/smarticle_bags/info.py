@@ -45,6 +45,9 @@ def format_info(reader: BagReader) -> str:
         f'Messages:          {info.message_count}',
         f'Log time:          {describe(info)}',
     ]
+    custom = info.custom_data or {}
+    if 'imported_from' in custom:
+        lines.append(f'Imported from:     {custom["imported_from"]} ({custom.get("import_units", "")})')
     topic_lines = [f'Topic: {t.name:<{width_name}} | Type: {t.type:<{width_type}} | '
                    f'Count: {t.message_count} | '
                    f'Serialization Format: {t.serialization_format}' for t in topics]

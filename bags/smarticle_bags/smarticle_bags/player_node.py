@@ -108,7 +108,8 @@ class PlayerNode(Node):
         if self.keyboard.active:
             self.create_timer(0.05, self.on_keys)
         self.create_timer(TICK, self.on_tick)
-        base = 'sim time' if time_base(self.reader.info)[0] is TimeBase.SIM else 'wall time'
+        base = {TimeBase.SIM: 'sim time', TimeBase.TRACKER: 'tracker time'}.get(time_base(self.reader.info)[0],
+                                                                                'wall time')
         span = (self.last - self.first) / 1e9
         self.get_logger().info(
             f'playing {self.config.bag}: {len(self.publishers_by_topic)} topics at rate {options.rate:g}, '

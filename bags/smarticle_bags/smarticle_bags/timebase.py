@@ -33,6 +33,7 @@ class TimeBase(Enum):
 
     SIM = 'sim'     # the /clock of a simulation (use_sim_time)
     WALL = 'wall'   # the recorder's system clock (receive time)
+    TRACKER = 'tracker'   # another tracker's own times, imported from its CSV (``smarticle-bag import``)
 
 
 def custom_data(base: TimeBase) -> dict[str, str]:
@@ -54,6 +55,8 @@ def time_base(info: BagInfo) -> tuple[TimeBase, bool]:
 def describe(info: BagInfo) -> str:
     """Return the ``Log time:`` text of ``smarticle-bag info``: the time base and where that is known from."""
     base, stated = time_base(info)
+    if base is TimeBase.TRACKER:
+        return 'tracker time (imported from a CSV\'s time column: smarticle-bag import)'
     if base is TimeBase.SIM:
         if stated:
             return 'sim time (/clock, recorded with use_sim_time)'
