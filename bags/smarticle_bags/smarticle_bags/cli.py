@@ -113,7 +113,7 @@ def _add_import(sub: Any) -> None:
     p.add_argument('--unit', choices=['m', 'cm', 'mm', 'px'], default=None,
                    help='length unit of x and y (default m; px with --px-per-bl)')
     p.add_argument('--px-per-bl', type=float, default=None, metavar='N',
-                   help='pixel tracks: pixels per body length W (W of --robot-preset)')
+                   help='pixel tracks: pixels per W, the body width of --robot-preset')
     p.add_argument('--robot-preset', default='small', choices=['small', 'feedback'],
                    help='the robot whose W scales pixel lengths (default small: 5.4 cm; feedback: 6.5 cm)')
     p.add_argument('--angle', choices=['rad', 'deg'], default='rad', help='unit of the heading column (default rad)')
@@ -373,6 +373,8 @@ def main(argv: list[str] | None = None) -> None:
     except BagError as err:
         print(f'{PROG} {ns.command}: error: {err}', file=sys.stderr)
         raise SystemExit(2) from None
+    except BrokenPipeError:
+        raise      # the reader of a listing has gone: closed_pipe_safe ends quietly
     except OSError as err:
         where = f' ({err.filename})' if err.filename else ''
         print(f'{PROG} {ns.command}: error: {err.strerror or err}{where}', file=sys.stderr)

@@ -1,7 +1,7 @@
 """Tracks from other trackers: a CSV of robot poses (motion capture, AprilTag or ArUco tracks) into a bag.
 
 The user names the time column and each robot's x, y and heading columns (other columns are ignored),
-the length unit (m, cm, mm, or pixels per body length W) and the angle unit; ``read_tracks`` turns the
+the length unit (m, cm, mm, or pixels per W, the body width) and the angle unit; ``read_tracks`` turns the
 file into ``Tracks`` (seconds, metres, radians) and ``write_bag`` writes them as the stack's pose topic
 (``/smarticles/poses``, ``geometry_msgs/msg/PoseArray``, index = robot id), so ``info``, ``analyze``,
 ``smarticle-calibrate`` and rosbag2 read the result.
@@ -71,7 +71,7 @@ class ImportSpec:
     time: str
     robots: tuple[RobotColumns, ...]
     length_unit: str = 'm'              # 'm', 'cm', 'mm' or 'px'
-    px_per_bl: float | None = None      # with length_unit 'px': pixels per body length W
+    px_per_bl: float | None = None      # with length_unit 'px': pixels per W (body width)
     body_preset: str = 'small'          # the robot whose W a pixel length is scaled by
     angle_unit: str = 'rad'             # 'rad' or 'deg'
     time_unit: str = 's'
@@ -94,7 +94,7 @@ class ImportSpec:
                 raise OptionError(str(err)) from None
         if self.length_unit == 'px':
             if self.px_per_bl is None or not math.isfinite(self.px_per_bl) or self.px_per_bl <= 0.0:
-                raise OptionError(f'pixel tracks need --px-per-bl > 0 (pixels per body length W), '
+                raise OptionError(f'pixel tracks need --px-per-bl > 0 (pixels per W, the body width), '
                                   f'got {self.px_per_bl}')
             try:
                 robot_preset(self.body_preset)
