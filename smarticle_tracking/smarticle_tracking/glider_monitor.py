@@ -119,6 +119,11 @@ class GliderMonitor:
     def update(self, time: float, poses: ArrayLike, contacts: ArrayLike | None = None,
                ) -> tuple[BoundPair, ...]:
         """Add one frame (time s, poses (N, 3), optional contacts (P,)) and return the bound pairs."""
+        return self.bound_pairs() if self.add(time, poses, contacts) else ()
+
+    def add(self, time: float, poses: ArrayLike, contacts: ArrayLike | None = None) -> bool:
+        """Add one frame as ``update`` does, without building the bound pairs (``bound_pairs`` gives them);
+        False for a frame before the gait start (in no period)."""
         if self._done:
             raise GliderInputError('the monitor was finished; call reset() before feeding a new run')
         if not math.isfinite(time):
@@ -145,7 +150,7 @@ class GliderMonitor:
             self._t0 = float(time)
         q = int(period_index(time, self._t0, self.config.period))
         if q < 0:
-            return ()                     # before the gait start: in no period
+            return False                  # before the gait start: in no period
         if self._period is None:
             self._period = q
         elif q > self._period:
@@ -154,7 +159,7 @@ class GliderMonitor:
                 self._close_period()      # skipped periods have no frames: every run ends
             self._period = q
         self._accumulate(frame, mask)
-        return self.bound_pairs()
+        return True
 
     def _accumulate(self, frame: FloatArray, mask: ArrayLike | None) -> None:
         """Add one frame's coordinates, hits, sums and centre of mass to the current period."""

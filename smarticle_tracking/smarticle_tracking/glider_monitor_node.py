@@ -98,7 +98,7 @@ class GliderMonitorNode(Node):
         self.counts: dict[str, int] = {}
         self.last_logged: dict[str, float] = {}
         self.last_report = -math.inf
-        self.bound: tuple[BoundPair, ...] = ()
+        self._bound: tuple[BoundPair, ...] | None = ()   # the bound pairs as of the last frame (None: not built)
         self.create_timer(1.0, self.publish_diagnostics, clock=rclpy.clock.Clock())
 
     def _count(self, key: str, text: str) -> None:
@@ -135,15 +135,23 @@ class GliderMonitorNode(Node):
             return
         self._watch_arms(len(poses))
         try:
-            self.bound = self.monitor.update(stamp, poses)
+            self.monitor.add(stamp, poses)
         except GliderError as err:   # time went backwards (replay, sim restart) or the team changed
             self._count('restarts', f'glider monitor restarted: {err}')
             self.monitor.reset()
-            self.bound = self.monitor.update(stamp, poses)
+            self.monitor.add(stamp, poses)
+        self._bound = None   # built when a report or the diagnostics need them, not on every frame
         period = self.settings.publish_period
         if stamp - self.last_report >= period or stamp < self.last_report:
             self.last_report = stamp
             self.report(msg.header, poses)
+
+    @property
+    def bound(self) -> tuple[BoundPair, ...]:
+        """The pairs bound as of the last frame."""
+        if self._bound is None:
+            self._bound = self.monitor.bound_pairs()
+        return self._bound
 
     def report(self, header: Any, poses: np.ndarray) -> None:
         """Publish the bound pairs and the markers of this frame, each only to someone listening (a new

@@ -171,3 +171,20 @@ def test_bad_frames_are_rejected_and_reset_allows_a_new_run() -> None:
     assert monitor.t0 is None and monitor.update(0.0, poses[0, :2]) != ()
     with pytest.raises(GliderConfigError):
         GliderMonitor(history=0)
+
+
+def test_add_then_bound_pairs_is_update() -> None:
+    """Frames added without building the bound pairs leave the same monitor: its bound pairs when asked,
+    its finished pairs at the end, equal to one fed by update."""
+    times, poses = jostling_robots(3, n_frames=800)
+    cfg = GliderConfig(min_periods=5, r_bind=0.09, travel_min_w_per_100=10.0)
+    updated, added = GliderMonitor(cfg, history=10_000), GliderMonitor(cfg, history=10_000)
+    asked = 0
+    for k, t in enumerate(times):
+        bound = updated.update(float(t), poses[k])
+        added.add(float(t), poses[k])
+        if k % 7 == 0:
+            asked += bool(bound)
+            assert added.bound_pairs() == bound
+    assert asked > 0
+    assert added.finish() == updated.finish()
