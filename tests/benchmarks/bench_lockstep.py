@@ -4,8 +4,10 @@ Configurations, one run each, interleaved, on the demo's scene (``dense``, 7 rob
 stack.yaml): the sim stack of ``sim_stack.launch.xml`` (sim bridge in lock-step, a gait node per robot, with
 feedback a feedback node per robot, the glider monitor)
 
-* composed in one process (``smarticle-compose``) on each executor of ``--executors`` (``single``:
-  rclpy's SingleThreadedExecutor; ``events``: rclpy's experimental EventsExecutor);
+* composed as ``sim.launch.xml`` runs it (``smarticle-launch ... composed:=true``): every node in one process
+  (``smarticle-compose``) but the glider monitor, which runs beside it in its own process, on each executor
+  of ``--executors`` (``single``: rclpy's SingleThreadedExecutor; ``events``: rclpy's experimental
+  EventsExecutor);
 * as separate processes (``smarticle-launch``);
 
 each with feedback on and off, next to the batch core (``Runner`` with the gait cores and, with feedback,
@@ -19,8 +21,8 @@ time spent in the physics (steps and FSR); the batch core's CPU figure is its pr
 
 Usage: ``python tests/benchmarks/bench_lockstep.py [--robots 7] [--periods 5] [--rounds 3]
 [--executors single,events] [--no-separate] [--profile]``; ``--profile`` also writes a cProfile of the
-composed stack with feedback on the last executor (``out/benchmarks/lockstep_composed.pstats``) and prints
-its top entries.
+composing host with feedback on the last executor, without the monitor (``out/benchmarks/lockstep_composed.pstats``)
+and prints its top entries.
 """
 
 from __future__ import annotations
@@ -44,6 +46,7 @@ from smarticle_common.launching import DomainReservation, executable, isolated_r
 from tests.benchmarks._common import machine_line, markdown_table, out_path, write_csv
 
 ROOT = Path(__file__).resolve().parents[2]
+SIM_FILE = ROOT / 'smarticle_bringup' / 'launch' / 'sim.launch.xml'
 STACK_FILE = ROOT / 'smarticle_bringup' / 'launch' / 'sim_stack.launch.xml'
 START_AT, PERIOD = 0.5, 1.6
 DIGEST = re.compile(r'final poses: sha256 ([0-9a-f]{64})')
@@ -104,23 +107,23 @@ def ros_rtf(mode: str, executor: str, robots: int, duration: float, feedback: bo
             profile: Path | None = None) -> tuple[float, float, float, str, str]:
     """x real time of the sim stack in ``mode`` ('composed' or 'separate'): (per wall second, per CPU second
     of the bridge's process, % of the wall time the bridge spent in the physics, final poses digest, note)."""
-    words = [f'robots:={robots}', f'duration:={duration!r}', f'feedback:={str(feedback).lower()}',
-             'wait_for_subscribers:=0']
+    words = [f'robots:={robots}', f'duration:={duration!r}', f'feedback:={str(feedback).lower()}']
     domain = DomainReservation()
     env = isolated_ros_env(domain.domain_id)
     try:
-        if mode == 'composed':
-            prefix = [sys.executable, '-m', 'cProfile', '-o', str(profile), '-m', 'smarticle_bringup.compose'] \
-                if profile else [executable('smarticle-compose')]
-            command = [*prefix, str(STACK_FILE), *words, '--executor', executor]
+        if profile:   # the host alone (no monitor: it runs in its own process), under the profiler
+            command = [sys.executable, '-m', 'cProfile', '-o', str(profile), '-m', 'smarticle_bringup.compose',
+                       str(STACK_FILE), *words, 'monitor:=false', 'wait_for_subscribers:=0', '--executor', executor]
+        elif mode == 'composed':   # as sim.launch.xml runs it: the host, the monitor in its own process
+            command = [executable('smarticle-launch'), str(SIM_FILE), *words, 'composed:=true',
+                       f'executor:={executor}', '--log-dir', str(log_dir)]
         else:
-            command = [executable('smarticle-launch'), str(STACK_FILE), *words, '--log-dir', str(log_dir)]
+            command = [executable('smarticle-launch'), str(STACK_FILE), *words, 'wait_for_subscribers:=1',
+                       '--log-dir', str(log_dir)]
         result = subprocess.run(command, env=env, capture_output=True, text=True, timeout=3600)
     finally:
         domain.close()
-    text = result.stdout + result.stderr
-    if mode == 'separate':
-        text += '\n'.join(p.read_text(errors='replace') for p in log_dir.glob('sim_bridge-*.log'))
+    text = result.stdout + result.stderr + '\n'.join(p.read_text(errors='replace') for p in log_dir.glob('*.log'))
     match, digest = RTF.search(text), DIGEST.search(text)
     if result.returncode != 0 or match is None or digest is None:
         return (float('nan'), float('nan'), float('nan'), '',

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import re
 from pathlib import Path
 
 import pytest
@@ -73,13 +74,24 @@ def test_sim_separate_starts_every_robot_and_composed_one_host() -> None:
     assert params_of(plan.nodes[3]) == {'lockstep': 'true', 'use_sim_time': 'true'}     # the feedback node
     assert params_of(plan.nodes[-1])['output'] == ''
     assert "output:=''" in plan.nodes[-1].ros_arguments()          # an empty value is the empty string
+    assert 'regex' not in params_of(plan.nodes[-1])                  # the arena topics only, unless asked
+    robots = resolve(LAUNCH / 'sim.launch.xml', {'robots': '2', 'record': 'true', 'record_robots': 'true'})
+    pattern = params_of(robots.nodes[-1])['regex']
+    assert [t for t in ('/smarticle_1/joint_states', '/smarticle_0/fsr', '/smarticle_1/joint_commands',
+                        '/smarticle_0/halt', '/smarticles/poses') if re.search(pattern, t)] == [
+        '/smarticle_1/joint_states', '/smarticle_0/fsr', '/smarticle_1/joint_commands']
     open_loop = resolve(LAUNCH / 'sim.launch.xml', {'robots': '2', 'composed': 'false', 'feedback': 'false'})
     assert names(open_loop) == ['/sim_bridge', '/glider_monitor', '/smarticle_0/gait', '/smarticle_1/gait']
     assert params_of(open_loop.nodes[2])['wait_for_feedback'] == 'false'      # no feedback node to wait for
     composed = resolve(LAUNCH / 'sim.launch.xml', {'robots': '5', 'view': 'true'})
-    host, view = composed.nodes
+    host, monitor, view = composed.nodes
     assert host.executable == 'smarticle-compose' and host.on_exit_shutdown and view.executable == 'smarticle-view'
     assert host.args[0] == str(LAUNCH / 'sim_stack.launch.xml') and 'robots:=5' in host.args
+    # the monitor beside the host, in its own process; on the wall clock, so /clock stays in the host
+    assert 'monitor:=false' in host.args and monitor.executable == 'glider_monitor'
+    assert 'use_sim_time' not in params_of(monitor)
+    assert names(resolve(LAUNCH / 'sim_stack.launch.xml', {'robots': '1', 'monitor': 'false'})) == [
+        '/sim_bridge', '/smarticle_0/gait', '/smarticle_0/feedback']
     one = resolve(LAUNCH / 'sim.launch.xml', {'robots': '1', 'composed': 'false'})
     assert names(one)[2:] == ['/smarticle_0/gait', '/smarticle_0/feedback']
 
@@ -97,7 +109,7 @@ def test_controller_and_feedback_arguments_put_the_users_nodes_in_place() -> Non
     assert [params_of(n)['wait_for_feedback'] for n in own.nodes[2:4]] == ['false', 'true']
     # composed: the stack's nodes in the host, the user's nodes as processes beside it
     composed = resolve(LAUNCH / 'sim.launch.xml', {'robots': '2', 'controller': user, 'feedback': user})
-    assert [n.executable for n in composed.nodes] == ['smarticle-compose'] + ['square_stop'] * 4
+    assert [n.executable for n in composed.nodes] == ['smarticle-compose', 'glider_monitor'] + ['square_stop'] * 4
     assert 'part:=composable' in composed.nodes[0].args and f'controller:={user}' in composed.nodes[0].args
     hosted = resolve(LAUNCH / 'sim_stack.launch.xml', {'robots': '2', 'controller': user, 'feedback': user,
                                                        'part': 'composable'})
