@@ -6,9 +6,11 @@ subscriber of its topic is hosted (the publisher's matched subscriptions are the
 the hosted callbacks in this thread and the middleware carries nothing (no serialisation, no wait set, no
 take), and with no subscriber at all nothing is done (the middleware would send to nobody); as soon as someone
 outside the process subscribes (a recorder, a test, a separate process), the middleware carries the topic to
-everyone, hosted subscribers included, exactly as before. Nothing a node does changes: it publishes and its callbacks
-run as they would on the executor, one at a time in publication order (a message published inside a callback
-is delivered after that callback returns, first published first delivered).
+everyone, hosted subscribers included, exactly as before. A publisher looks at its topic's subscribers at most
+every ``GRAPH_LOOK`` wall seconds (a look costs microseconds, and a tick publishes dozens of messages), so a
+subscriber outside is served from at most that long after it matched. Nothing a node does changes: it publishes
+and its callbacks run as they would on the executor, one at a time in publication order (a message published
+inside a callback is delivered after that callback returns, first published first delivered).
 
 Left to the middleware: transient-local (latched) topics, whose late subscribers need the history;
 subscriptions whose callbacks take the message info; publications and subscriptions made after ``connect``.
@@ -16,12 +18,16 @@ subscriptions whose callbacks take the message info; publications and subscripti
 
 from __future__ import annotations
 
+import time
 from collections import deque
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
 from rclpy.qos import DurabilityPolicy, QoSCompatibility, qos_check_compatible
+
+#: Wall seconds between two looks of a wrapped publisher at its topic's subscriber count.
+GRAPH_LOOK = 0.05
 
 
 @dataclass
@@ -64,12 +70,16 @@ class LocalDelivery:
         hosted = len(subscriptions)
         topic = publisher.topic_name
         counts = self.counts
+        look = [0.0, False]   # (wall time of the next look at the subscribers, someone outside listens)
 
         def publish(msg: Any) -> None:
             if not isinstance(msg, publisher.msg_type):   # bytes or a wrong type: the middleware's own handling
                 through_middleware(msg)
                 return
-            if publisher.get_subscription_count() > hosted:   # someone outside listens: the middleware, to all
+            now = time.monotonic()
+            if now >= look[0]:
+                look[:] = now + GRAPH_LOOK, publisher.get_subscription_count() > hosted
+            if look[1]:   # someone outside listens: the middleware, to all
                 counts.middleware += 1
                 counts.by_topic[topic] = counts.by_topic.get(topic, 0) + 1
                 through_middleware(msg)

@@ -1,4 +1,5 @@
-"""Planar poses to and from ROS messages (``geometry_msgs/Pose`` and ``PoseArray``), defined once.
+"""Planar poses to and from ROS messages (``geometry_msgs/Pose`` and ``PoseArray``), and stamps to and from
+integer nanoseconds, defined once.
 
 Message classes only, no rclpy: the nodes, the demo and the bag readers share these. An unseen robot
 (a NaN row of a pose array) goes on the wire as the contract's unseen pose (``topics.UNSEEN_Z``: finite,
@@ -11,10 +12,22 @@ import math
 from typing import Any
 
 import numpy as np
+from builtin_interfaces.msg import Time as TimeMsg
 from geometry_msgs.msg import Pose
 
 from .poses import heading_quaternion, quaternion_heading
 from .topics import UNSEEN_Z
+
+
+def stamp_ns(stamp: Any) -> int:
+    """Integer nanoseconds of a ``builtin_interfaces/Time`` (as rclpy's ``Time.from_msg``, without its objects)."""
+    return stamp.sec * 1_000_000_000 + stamp.nanosec
+
+
+def stamp_msg(ns: int) -> TimeMsg:
+    """The ``builtin_interfaces/Time`` of ``ns`` >= 0 integer nanoseconds (as rclpy's ``Time.to_msg``)."""
+    sec, nanosec = divmod(ns, 1_000_000_000)
+    return TimeMsg(sec=sec, nanosec=nanosec)
 
 
 def unseen_pose() -> Pose:

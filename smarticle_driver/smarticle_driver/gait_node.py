@@ -18,6 +18,7 @@ from smarticle_common.facts import GAIT_PERIOD, SERVO_SPEED
 from smarticle_common.gait import (GaitCommand, GaitConfig, GaitError, SquareGait, TIME_EPS, board_time,
                                    check_start_time)
 from smarticle_common.launching import summary_line
+from smarticle_common.messages import stamp_msg, stamp_ns
 from smarticle_common.node import accept_runtime_changes, read_config, resolve_robot_id, run_node
 from smarticle_common.params import ROBOT_ID_PARAM, ParameterError, ParamSpec
 
@@ -185,22 +186,22 @@ class GaitNode(Node):
         the same time (``on_decision``); a repeated clock message (the bridge resends it while it waits)
         is answered again.
         """
-        now = Time.from_msg(msg.clock)
-        if now.nanoseconds < self._latest_ns:
+        now_ns = stamp_ns(msg.clock)
+        if now_ns < self._latest_ns:
             self.get_logger().warning('clock went backwards: ignored')
             return
-        self._latest_ns = now.nanoseconds
+        self._latest_ns = now_ns
         if self.autostart and self.gait.start_time is None:
-            self.gait.start(now.nanoseconds * 1e-9)
+            self.gait.start(now_ns * 1e-9)
         if self.wait_for_feedback:
-            self._unanswered_ns = now.nanoseconds
+            self._unanswered_ns = now_ns
             self.answer_clock()
             return
-        self.publish_command(now)
+        self.publish_command(now_ns)
 
     def on_decision(self, msg: Any) -> None:
         """Lock-step with feedback: keep the decision on the sample of ``msg.header.stamp``; answer if due."""
-        stamp = Time.from_msg(msg.stamp).nanoseconds
+        stamp = stamp_ns(msg.stamp)
         if stamp < self._latest_ns:
             return   # a repeat of a decision on a time already answered
         self._decisions[stamp] = msg.frame_id
@@ -214,14 +215,15 @@ class GaitNode(Node):
         if self._decisions[stamp] and self.gait.halt(self.gait_clock(stamp * 1e-9)):
             self.halts += 1
             self.get_logger().info(f'halt at t = {stamp * 1e-9:.4f} s ({self._decisions[stamp]})')
-        for old in [s for s in self._decisions if s < stamp]:
-            del self._decisions[old]
-        self.publish_command(Time(nanoseconds=stamp))
+        if len(self._decisions) > 1:
+            for old in [s for s in self._decisions if s < stamp]:
+                del self._decisions[old]
+        self.publish_command(stamp)
 
-    def publish_command(self, now: Time) -> None:
-        """Lock-step: publish the gait's command for exactly ``now``."""
-        t = self.gait_clock(now.nanoseconds * 1e-9)
-        self.publisher.publish(self.to_message(self.gait.command(t + TIME_EPS), now))
+    def publish_command(self, now_ns: int) -> None:
+        """Lock-step: publish the gait's command for exactly ``now_ns`` (integer nanoseconds)."""
+        t = self.gait_clock(now_ns * 1e-9)
+        self.publisher.publish(self.to_message(self.gait.command(t + TIME_EPS), now_ns))
         self.sent += 1
 
     def on_tick(self) -> None:
@@ -233,7 +235,7 @@ class GaitNode(Node):
             self.gait.start(now.nanoseconds * 1e-9)
         command = self.gait.command(self.gait_clock(now.nanoseconds * 1e-9) + TIME_EPS)
         if command.targets != self._last_targets or now.nanoseconds - self._last_sent_ns >= self.heartbeat:
-            self.publisher.publish(self.to_message(command, now))
+            self.publisher.publish(self.to_message(command, now.nanoseconds))
             self.sent += 1
             self._last_targets = command.targets
             self._last_sent_ns = now.nanoseconds
@@ -243,10 +245,11 @@ class GaitNode(Node):
         self.get_logger().info(summary_line(self.robot_id, {'commands': self.sent, 'halts': self.halts}))
         super().destroy_node()
 
-    def to_message(self, command: GaitCommand, now: Time) -> Any:
-        """Convert a gait command to a JointState (position = targets, velocity = speed limits)."""
+    def to_message(self, command: GaitCommand, now_ns: int) -> Any:
+        """Convert a gait command stamped ``now_ns`` to a JointState (position = targets, velocity = speed
+        limits)."""
         msg = self._joint_state_type()
-        msg.header.stamp = now.to_msg()
+        msg.header.stamp = stamp_msg(now_ns)
         msg.name = list(topics.JOINT_NAMES)
         msg.position = [float(a) for a in command.targets]
         msg.velocity = [command.speed, command.speed]

@@ -16,6 +16,7 @@ from rclpy.node import Node
 from rclpy.time import Time
 from smarticle_common import topics
 from smarticle_common.gait import board_time
+from smarticle_common.messages import stamp_ns
 from smarticle_common.node import (OK, WARN, DiagnosticsPublisher, accept_runtime_changes, read_config,
                                    resolve_robot_id, run_node)
 from smarticle_common.params import ParameterError
@@ -87,7 +88,8 @@ class FeedbackNode(Node):
         again: its decision is resent.
         """
         last = self._last_decision
-        if self.lockstep and last is not None and Time.from_msg(msg.header.stamp) <= Time.from_msg(last.stamp):
+        sampled_ns = stamp_ns(msg.header.stamp)
+        if self.lockstep and last is not None and sampled_ns <= stamp_ns(last.stamp):
             self.decision_pub.publish(last)
             return
         decided_face = ''   # the decision topic's frame_id: the halting face, '' for no halt
@@ -96,8 +98,7 @@ class FeedbackNode(Node):
             for warning in sample.warnings:
                 self.report('bad_values', warning)
             # the robot's board clock, as its gait node reads it (with clock_rate_offset: its own periods)
-            t = board_time(Time.from_msg(msg.header.stamp).nanoseconds * 1e-9, self.controller.start_time,
-                           self.clock_rate)
+            t = board_time(sampled_ns * 1e-9, self.controller.start_time, self.clock_rate)
             decision = self.controller.update(t, sample.forces)
             if decision.halt:
                 halt = self.Header()

@@ -240,12 +240,15 @@ class SimBridgeCore:
         listener) the sample is the force at this instant. With nobody to sample (``robots`` empty) the
         per-step hook is removed and the physics steps a tick at once again.
         """
-        now = self.physics.fsr(robots)
         peak = self._fsr_reading.take_peak() if self._fsr_reading is not None else None
-        if peak is not None:
-            for row, k in enumerate(robots):
-                if k in self._fsr_watch:   # the peak of the readings, which include this instant's step
-                    now[row] = peak[self._fsr_watch.index(k)]
+        if peak is not None and list(robots) == self._fsr_watch:   # the peak of the readings, which include
+            now = peak                                                # this instant's step
+        else:
+            now = self.physics.fsr(robots)
+            if peak is not None:
+                for row, k in enumerate(robots):
+                    if k in self._fsr_watch:
+                        now[row] = peak[self._fsr_watch.index(k)]
         if list(robots) != self._fsr_watch:   # a new set of robots: a new reading (its average starts from zero)
             self._fsr_reading = FsrReading(self.physics, robots) if robots else None
         self._fsr_watch = list(robots)

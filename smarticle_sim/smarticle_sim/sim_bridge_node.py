@@ -23,7 +23,7 @@ from rclpy.node import Node
 from rclpy.time import Time
 from smarticle_common import topics
 from smarticle_common.launching import summary_line
-from smarticle_common.messages import pose_message
+from smarticle_common.messages import pose_message, stamp_msg, stamp_ns
 from smarticle_common.node import DiagnosticsPublisher, read_config, run_node
 from smarticle_common.robot_tf import RobotModelPublisher
 from smarticle_common.params import ParameterError
@@ -43,9 +43,12 @@ def _msg(key: str) -> Any:
 SUBSCRIBER_SETTLE = 0.5
 #: Lock-step: wall seconds between two looks, while waiting for commands, at who publishes them.
 COMMANDER_CHECK = 0.5
+#: Wall seconds between two looks at who listens to the optional per-robot outputs (joint states, poses).
+LISTENER_LOOK = 0.05
 #: Lock-step: the longest the executor goes without a turn (wall s) when every command is already in at a
-#: tick (a composing host hands them over in-process): timers and messages from outside still get their turn.
-EXECUTOR_LOOK = 0.005
+#: tick (a composing host hands them over in-process): timers and messages from outside still get their turn
+#: (a turn of the executor costs about half a millisecond, so not every tick gets one).
+EXECUTOR_LOOK = 0.05
 
 
 class Lateness:
@@ -135,6 +138,10 @@ class SimBridgeNode(Node):
         self.commands_received = 0
         self.published = [0, 0]   # /clock and /smarticles/poses messages published (the run's last log line)
         self.spun = 0.0   # wall time (monotonic) of the executor's last turn in the lock-step wait
+        #: Wall time of the next look at the optional outputs' listeners, and the robots each one has.
+        self.listeners_due = 0.0
+        self.joint_listened: list[int] = []
+        self.pose_listened: list[int] = []
         self.reported: set[tuple[str, int]] = set()   # (cause, robot) of bad inputs already logged
         self.warned_ids: set[int] = set()
         #: Robots whose joint commands topic has had a publisher (a commander that may since have exited).
@@ -156,7 +163,7 @@ class SimBridgeNode(Node):
     def on_command(self, robot: int, msg: Any) -> None:
         """Hand a joint command to the core; report what it dropped or changed."""
         self.commands_received += 1
-        stamp = Time.from_msg(msg.header.stamp).nanoseconds
+        stamp = stamp_ns(msg.header.stamp)
         checked = self.core.apply_command(robot, list(msg.name), list(msg.position), list(msg.velocity),
                                           stamp)
         for counter, count in checked.counts.items():
@@ -203,7 +210,7 @@ class SimBridgeNode(Node):
     # ------------------------------------------------------------------ outputs
     def publish_outputs(self) -> None:
         """Publish /clock and poses, and joint states, FSR and per-robot poses of robots someone listens to."""
-        now = Time(nanoseconds=self.core.time_ns).to_msg()
+        now = stamp_msg(self.core.time_ns)
         clock = self.Clock()
         clock.clock = now
         self.clock_pub.publish(clock)
@@ -211,14 +218,18 @@ class SimBridgeNode(Node):
         physics = self.core.physics
         state = physics.state()
         poses = self.core.poses()
-        for k, pub in enumerate(self.joint_pubs):
-            if pub.get_subscription_count() == 0:
-                continue  # nobody listens: skip the message (a new subscriber gets the next one)
+        wall = time.monotonic()
+        if wall >= self.listeners_due:   # nobody listens: no message (a new subscriber gets one from the next look)
+            self.listeners_due = wall + LISTENER_LOOK
+            self.joint_listened = [k for k, pub in enumerate(self.joint_pubs) if pub.get_subscription_count()]
+            self.pose_listened = [k for k, pub in enumerate(self.pose_pubs) if pub.get_subscription_count()]
+        for k in self.joint_listened:
+            pub = self.joint_pubs[k]
             msg = self.JointState()
             msg.header.stamp = now
             msg.name = list(topics.JOINT_NAMES)
-            msg.position = [float(v) for v in state.arm_angles[k]]
-            msg.velocity = [float(v) for v in state.arm_velocities[k]]
+            msg.position = state.arm_angles[k].tolist()
+            msg.velocity = state.arm_velocities[k].tolist()
             pub.publish(msg)
         listened = [k for k, pub in enumerate(self.fsr_pubs) if pub.get_subscription_count() > 0]
         forces = self.core.fsr_sample(listened)   # peaks since the last publication; [] stops the tracking
@@ -232,12 +243,11 @@ class SimBridgeNode(Node):
         self.poses_pub.publish(array)
         self.published[1] += 1
         self.robot_model.publish(now, poses, state.arm_angles)
-        for k, pub in enumerate(self.pose_pubs):
-            if pub.get_subscription_count() > 0:
-                msg = self.PoseStamped()
-                msg.header = array.header
-                msg.pose = array.poses[k]
-                pub.publish(msg)
+        for k in self.pose_listened:
+            msg = self.PoseStamped()
+            msg.header = array.header
+            msg.pose = array.poses[k]
+            self.pose_pubs[k].publish(msg)
         if self.core.frame_due():
             if self.image_pub.get_subscription_count() > 0:
                 self.publish_frame(now)
@@ -249,7 +259,7 @@ class SimBridgeNode(Node):
         msg = self.JointState()
         msg.header.stamp = now
         msg.name = list(topics.FSR_FACES)
-        msg.effort = [float(v) for v in forces]
+        msg.effort = forces.tolist()   # the floats of the row, without a Python loop
         self.fsr_sent[robot] = msg
         self.fsr_pubs[robot].publish(msg)
 
