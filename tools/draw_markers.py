@@ -14,7 +14,7 @@ import sys
 import numpy as np
 from smarticle_common.gait import GaitConfig
 from smarticle_sim.scenes import dense_scene
-from smarticle_sim.settings import SimConfig
+from smarticle_sim.config_builder import build_config
 from smarticle_sim.runner import Runner
 from smarticle_tracking.glider_monitor import GliderMonitor
 from smarticle_tracking.gliders import GliderConfig
@@ -23,7 +23,7 @@ from smarticle_tracking.markers import render_png, scene_markers
 
 def main(path: str) -> None:
     """Simulate 8 periods of the dense 7-robot scene and draw the last frame's markers."""
-    config = SimConfig.from_preset('small')
+    config = build_config('small')
     gait = GaitConfig.from_degrees(90.0)
     monitor = GliderMonitor(GliderConfig(min_periods=3))
     bound: tuple = ()  # type: ignore[type-arg]

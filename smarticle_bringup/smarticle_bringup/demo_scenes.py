@@ -184,14 +184,11 @@ def run_batch(scene: DemoScene, seed: int, periods: float | None = None, feedbac
     --clock-noise`` gives the gait nodes the same draws)."""
     from smarticle_feedback.controller import ImpactController
     from smarticle_sim.batch import run_trial
+    from smarticle_sim.config_builder import build_config
     from smarticle_sim.runner import FeedbackController
-    from smarticle_sim.settings import SimConfig
+    from smarticle_sim.settings import CLOCK_RATE_SD
 
-    config = SimConfig.from_preset(scene.preset)
-    if clock_noise:
-        from smarticle_sim.settings import CLOCK_RATE_SD, NoiseConfig
-
-        config = config.with_noise(NoiseConfig(clock_rate_sd=CLOCK_RATE_SD, servo_jitter=0.0, friction_sd=0.0))
+    config = build_config(scene.preset, noise={'clock_rate_sd': CLOCK_RATE_SD} if clock_noise else None)
     sim_scene = scene.scene(seed)
     use_feedback = scene.feedback if feedback is None else feedback
     controllers: list[FeedbackController] = []

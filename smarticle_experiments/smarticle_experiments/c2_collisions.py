@@ -28,13 +28,11 @@ def record_pair(seed: int = 0, periods: float = 40.0, alpha_max_deg: float = 90.
     ``noise``: a ``NoiseConfig`` (None: off), its draws from ``seed`` unless it names its own, as in P6.
     """
     from smarticle_common.pairs import pair_coordinates
-    from smarticle_sim.physics import FsrReading
+    from smarticle_sim.config_builder import build_config
+    from smarticle_sim.physics import FsrReading, Physics
     from smarticle_sim.runner import Runner
-    from smarticle_sim.settings import SimConfig
 
-    config = SimConfig.from_preset(preset)
-    if noise is not None:
-        config = config.with_noise(noise)   # the pair scene carries the trial seed its draws take
+    config = build_config(preset, noise=noise)   # the pair scene carries the trial seed its draws take
     gait = GaitConfig.from_degrees(alpha_max_deg, servo_speed=config.robot.servo_speed)
     scene, _, phases = start_scene(config, gait, seed, base)
     times: list[float] = []
@@ -47,6 +45,7 @@ def record_pair(seed: int = 0, periods: float = 40.0, alpha_max_deg: float = 90.
 
         def on_step(run: Runner) -> None:
             ph = run.physics
+            assert isinstance(ph, Physics)   # Bullet's link contacts: the world Runner.with_gaits builds by default
             times.append(ph.time)
             fsr.append(reading.step())   # what the feedback policy's FSR sample is made of
             links.append(ph.link_contacts(0, 1))

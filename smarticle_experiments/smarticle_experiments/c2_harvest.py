@@ -80,11 +80,11 @@ def harvest_recording(seed: int, periods: float = 150.0, preset: str = 'feedback
     from smarticle_common.gait import GaitConfig
     from smarticle_sim.batch import run_trial
     from smarticle_sim.runner import ContactPeriods
+    from smarticle_sim.config_builder import build_config
     from smarticle_sim.scenes import dense_scene
-    from smarticle_sim.settings import SimConfig
     from smarticle_tracking.gliders import GliderClass, GliderConfig, analyse_gliders
 
-    config = SimConfig.from_preset(preset)
+    config = build_config(preset)
     bl = config.robot.body_length
     gait = GaitConfig.from_degrees(alpha_max_deg, servo_speed=config.robot.servo_speed)
     scene = dense_scene(config.robot, gait, n=robots, seed=seed)

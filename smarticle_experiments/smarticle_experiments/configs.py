@@ -1,26 +1,24 @@
-"""The one place a trial's SimConfig and gait are made from a spec's settings (every trial kind uses it).
+"""A trial's SimConfig and gait from a spec's settings (every trial kind uses it), through the one builder.
 
-``make_config(preset, physics, robot, noise)`` is the project's default SimConfig of a robot preset with
-PhysicsConfig / RobotSpec field overrides and noise sources, validated; a name that is no field raises
-SpecError naming it and the known ones.
+``make_config(preset, physics, robot, noise, diagnostics, engine)`` is ``smarticle_sim.config_builder.
+build_config`` with a spec's names and errors: a name that is no field raises SpecError naming it and the
+known ones.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import fields, replace
 from typing import Any
 
 from smarticle_common.gait import GaitConfig
-from smarticle_sim.settings import NoiseConfig, PhysicsConfig, RobotSpec, SimConfig, robot_preset
+from smarticle_sim.config_builder import (DIAGNOSTIC_FIELDS, NOISE_FIELDS, PHYSICS_FIELDS, ROBOT_FIELDS,
+                                          UnknownSettingError, build_config, check_names)
+from smarticle_sim.settings import NoiseConfig, SimConfig
 
 from .errors import SpecError
 
-#: PhysicsConfig and RobotSpec field names a spec may override (``physics:`` and ``robot:`` mappings).
-PHYSICS_FIELDS: frozenset[str] = frozenset(f.name for f in fields(PhysicsConfig))
-ROBOT_FIELDS: frozenset[str] = frozenset(f.name for f in fields(RobotSpec)) - {'name'}
-#: NoiseConfig field names a spec may set (``noise:`` mapping; unset fields are off, ``NoiseConfig.none()``).
-NOISE_FIELDS: frozenset[str] = frozenset(f.name for f in fields(NoiseConfig))
+__all__ = ['DIAGNOSTIC_FIELDS', 'NOISE_FIELDS', 'PHYSICS_FIELDS', 'ROBOT_FIELDS', 'config_of', 'make_config',
+           'make_gait', 'noise_mapping']
 
 
 def noise_mapping(value: Any) -> dict[str, Any]:
@@ -35,25 +33,23 @@ def noise_mapping(value: Any) -> dict[str, Any]:
                                                          'friction_length')}
     if not isinstance(value, Mapping):
         raise SpecError(f"noise must be 'paper', 'none' or a mapping of NoiseConfig fields, got {value!r}")
-    unknown = sorted(set(value) - NOISE_FIELDS)
-    if unknown:
-        raise SpecError(f'noise.{unknown[0]} is not a NoiseConfig field; known: {", ".join(sorted(NOISE_FIELDS))}')
+    try:
+        check_names('noise', value)
+    except UnknownSettingError as err:
+        raise SpecError(str(err)) from None
     return dict(value)
 
 
 def make_config(preset: str, physics: Mapping[str, Any], robot: Mapping[str, Any],
-                noise: Mapping[str, Any] | None = None) -> SimConfig:
-    """The project's default SimConfig for ``preset`` with PhysicsConfig / RobotSpec overrides and the noise
-    sources of ``noise`` (NoiseConfig fields; every source not named is off), all validated."""
-    unknown = sorted(set(physics) - PHYSICS_FIELDS)
-    if unknown:
-        raise SpecError(f'physics.{unknown[0]} is not a PhysicsConfig field; '
-                        f'known: {", ".join(sorted(PHYSICS_FIELDS))}')
-    unknown = sorted(set(robot) - ROBOT_FIELDS)
-    if unknown:
-        raise SpecError(f'robot.{unknown[0]} is not a RobotSpec field; known: {", ".join(sorted(ROBOT_FIELDS))}')
-    return SimConfig(replace(robot_preset(preset), **robot), replace(PhysicsConfig(), **physics),
-                     replace(NoiseConfig.none(), **noise_mapping(noise)))
+                noise: Mapping[str, Any] | None = None, diagnostics: Mapping[str, Any] | None = None,
+                engine: str = 'bullet') -> SimConfig:
+    """``build_config`` of a spec's settings: ``preset`` with PhysicsConfig / RobotSpec overrides, the noise
+    sources of ``noise`` (NoiseConfig fields; every source not named is off) and ``diagnostics``, for
+    ``engine``, all validated."""
+    try:
+        return build_config(preset, physics, robot, noise_mapping(noise), diagnostics, engine)
+    except UnknownSettingError as err:
+        raise SpecError(str(err)) from None
 
 
 def make_gait(config: SimConfig, alpha_max_deg: float, servo_speed: float | None = None,
@@ -66,6 +62,4 @@ def make_gait(config: SimConfig, alpha_max_deg: float, servo_speed: float | None
 def config_of(p: Mapping[str, Any]) -> SimConfig:
     """SimConfig of a trial's parameters."""
     return make_config(str(p['preset']), dict(p.get('physics') or {}), dict(p.get('robot') or {}),
-                       dict(p.get('noise') or {}))
-
-
+                       dict(p.get('noise') or {}), dict(p.get('diagnostics') or {}))

@@ -235,19 +235,14 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
     ``engine`` builds the world (``smarticle_sim.engines.engine_factory``; None: Bullet).
     """
     from smarticle_sim.batch import run_trial
-    from smarticle_sim.physics import Physics
+    from smarticle_sim.config_builder import build_config
+    from smarticle_sim.engine import Engine
     from smarticle_sim.runner import ContactPeriods, Controller, FeedbackController, GaitController
-    from smarticle_sim.settings import SimConfig
     from smarticle_common.pairs import pair_coordinates
 
     wall0 = time.perf_counter()
-    config = SimConfig.from_preset(preset)
-    if robot_changes:
-        config = replace(config, robot=replace(config.robot, **dict(robot_changes)))  # type: ignore[arg-type]
-    if physics_changes:
-        config = config.with_physics(**dict(physics_changes))
-    if noise is not None:
-        config = config.with_noise(noise)   # the pair scene carries the trial seed its draws take
+    # the pair scene carries the trial seed the noise draws take
+    config = build_config(preset, physics_changes, robot_changes, noise)
     gait = GaitConfig.from_degrees(condition.alpha_max_deg, servo_speed=config.robot.servo_speed)
     scene, (r, theta, phi), phases = start_scene(config, gait, seed, base)
     feedback_controllers: list[FeedbackController] = []
@@ -255,7 +250,7 @@ def run_pair_trial(condition: Condition, seed: int, periods: float, feedback: Fe
     # every manifold point between the two robots counts, as the contact tables of docs/feedback.md were made
     counter = ContactPeriods(gait.period, start_time, max_distance=math.inf) if count_contacts else None
 
-    def add_feedback(_: Physics, gaits: GaitController) -> Sequence[Controller]:
+    def add_feedback(_: Engine, gaits: GaitController) -> Sequence[Controller]:
         extra: list[Controller] = [counter] if counter is not None else []
         if not condition.feedback:
             return extra

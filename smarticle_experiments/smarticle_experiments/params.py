@@ -13,7 +13,7 @@ from typing import Any, ClassVar
 from smarticle_common.gait import GaitConfig
 from smarticle_sim.settings import SimConfig
 
-from .configs import NOISE_FIELDS, PHYSICS_FIELDS, ROBOT_FIELDS, make_config, make_gait
+from .configs import DIAGNOSTIC_FIELDS, NOISE_FIELDS, PHYSICS_FIELDS, ROBOT_FIELDS, make_config, make_gait
 from .kind import KindParams, optional
 
 
@@ -22,7 +22,7 @@ class SimParams(KindParams):
     """A robot preset with PhysicsConfig / RobotSpec overrides and noise sources, a square gait, a run length."""
 
     GROUPS: ClassVar[Mapping[str, frozenset[str]]] = {'physics': PHYSICS_FIELDS, 'robot': ROBOT_FIELDS,
-                                                      'noise': NOISE_FIELDS}
+                                                      'noise': NOISE_FIELDS, 'diagnostics': DIAGNOSTIC_FIELDS}
 
     preset: str = 'small'                                           # robot preset (smarticle_sim.settings)
     physics: Mapping[str, Any] = field(default_factory=dict)        # PhysicsConfig field overrides
@@ -32,11 +32,13 @@ class SimParams(KindParams):
     servo_speed: float | None = None                                # gait servo speed (rad/s; None: the robot's)
     #: NoiseConfig fields (the sources not named are off); None: no noise (left out of the stored mapping).
     noise: Mapping[str, Any] | None = optional()
+    #: Diagnostics fields, knobs measured and not taken (smarticle_sim.diagnostics); None: the shipped model.
+    diagnostics: Mapping[str, Any] | None = optional()
 
     def config(self) -> SimConfig:
         """The trial's SimConfig."""
         return make_config(str(self.preset), dict(self.physics or {}), dict(self.robot or {}),
-                           dict(self.noise or {}))
+                           dict(self.noise or {}), dict(self.diagnostics or {}))
 
     def gait(self, config: SimConfig) -> GaitConfig:
         """The trial's square gait on ``config``'s robot."""

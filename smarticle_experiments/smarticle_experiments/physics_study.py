@@ -5,11 +5,11 @@ Each measurement runs one world step by step with the instruments the study need
 step, tilt per tick, contact per period) and returns a compact row; ``trials.py`` registers them as the
 kinds ``study_collision``, ``study_drift``, ``study_pair``, ``study_dense`` and ``study_impact``, which
 ``smarticle-experiments physics-study`` runs on the engine into the store. A trial's ``settings`` is a flat
-mapping of PhysicsConfig / RobotSpec fields on top of the shipped defaults, plus ``gait_speed`` (the gait's
-servo speed, rad/s) and Bullet knobs that are not settings fields, applied after the world is built
-(``apply_extras``; names starting with ``x_``: ``x_split_impulse``, ``x_split_threshold``, ``x_rvt``
-restitution velocity threshold, ``x_cfm``, ``x_cone``, ``x_friction_erp``, ``x_plate_restitution``,
-``x_tilt_inertia``, ``x_contact_stiffness`` / ``x_contact_damping``, ``x_ccd`` swept-sphere radius in m).
+mapping of PhysicsConfig / RobotSpec fields on top of the shipped defaults, ``Diagnostics`` fields (the knobs
+measured and not taken, raw Bullet knobs included: ``split_impulse``, ``split_threshold``, ``cfm``,
+``cone_friction``, ``friction_erp``, ``plate_restitution``, ``link_contact_stiffness`` /
+``link_contact_damping``, ``mass_model``, ``yaw_inertia_scale``, ``plate_friction_slip``, ``arm_ends``;
+smarticle_sim.diagnostics) and ``gait_speed`` (the gait's servo speed, rad/s).
 The named models of the study (its old default, 'authors', 'candidate', ...) are history: archive/README.md.
 """
 
@@ -18,21 +18,22 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Mapping
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from typing import Any, Generic, TypeVar
 
 import numpy as np
-from smarticle_common.facts import BODY_LENGTH, R_BIND_BL, RobotSpec
+from smarticle_common.facts import BODY_LENGTH, R_BIND_BL
 from smarticle_common.gait import GaitConfig
 from smarticle_common.pairs import one_pair
 
 from smarticle_sim.errors import SceneError, SimTrouble
-from smarticle_sim.physics import ARM_JOINTS, Physics
+from smarticle_sim.physics import Physics
 from smarticle_sim.runner import Runner
 from smarticle_sim.scenes import RobotPlacement, Scene, dense_scene, pair_scene
-from smarticle_sim.settings import PhysicsConfig, SimConfig
+from smarticle_sim.settings import SimConfig
 
-from .configs import make_config
+from .configs import DIAGNOSTIC_FIELDS, PHYSICS_FIELDS, ROBOT_FIELDS, make_config
+from .quantities import theta_quadrants
 from .errors import SpecError
 from .results import (StudyCollisionResult, StudyDenseResult, StudyDriftResult, StudyImpactResult,
                       StudyInadmissibleResult, StudyPairResult, TrialResult)
@@ -42,86 +43,50 @@ BL = BODY_LENGTH
 
 
 def split_settings(settings: Mapping[str, Any]) -> tuple[dict[str, Any], dict[str, Any], dict[str, Any], float | None]:
-    """A study's flat settings as (PhysicsConfig fields, RobotSpec fields, ``x_`` extras, gait speed or None).
+    """A study's flat settings as (PhysicsConfig fields, RobotSpec fields, Diagnostics fields, gait speed or None).
 
     A ``time_step`` is snapped to 1 / a whole number of Hz and, without a ``control_tick``, the tick becomes
     1/60 s when that is a whole number of steps, else one step. SpecError names an unknown setting.
     """
-    physics_names = {f.name for f in fields(PhysicsConfig)}
-    robot_names = {f.name for f in fields(RobotSpec)}
-    physics = {k: v for k, v in settings.items() if k in physics_names}
-    robot = {k: v for k, v in settings.items() if k in robot_names}
-    extras = {k: v for k, v in settings.items() if k.startswith('x_')}
-    unknown = sorted(set(settings) - physics_names - robot_names - set(extras) - {'gait_speed'})
+    physics = {k: v for k, v in settings.items() if k in PHYSICS_FIELDS}
+    robot = {k: v for k, v in settings.items() if k in ROBOT_FIELDS}
+    diagnostics = {k: v for k, v in settings.items() if k in DIAGNOSTIC_FIELDS}
+    unknown = sorted(set(settings) - PHYSICS_FIELDS - ROBOT_FIELDS - DIAGNOSTIC_FIELDS - {'gait_speed'})
     if unknown:
-        raise SpecError(f'unknown setting(s) {unknown}: not a PhysicsConfig / RobotSpec field, gait_speed or x_ knob')
+        raise SpecError(f'unknown setting(s) {unknown}: not a PhysicsConfig / RobotSpec / Diagnostics field or '
+                        'gait_speed')
     if 'time_step' in physics:
         dt = physics['time_step'] = 1.0 / round(1.0 / float(physics['time_step']))
         if 'control_tick' not in physics:   # a tick must be a whole number of steps: 1/60 s or one step
             physics['control_tick'] = 1.0 / 60.0 if round(1.0 / dt) % 60 == 0 else dt
     speed = settings.get('gait_speed')
-    return physics, robot, extras, None if speed is None else float(speed)
+    return physics, robot, diagnostics, None if speed is None else float(speed)
 
 
-def study_config(settings: Mapping[str, Any]) -> tuple[SimConfig, float, dict[str, Any]]:
-    """(SimConfig, gait servo speed, extras) of a settings mapping (``trials.make_config`` of the small preset);
-    a gait speed above the servo's raises the servo's top speed to it."""
-    physics, robot, extras, speed = split_settings(settings)
-    config = make_config('small', physics, robot)
+def study_config(settings: Mapping[str, Any]) -> tuple[SimConfig, float]:
+    """(SimConfig, gait servo speed) of a settings mapping (``configs.make_config`` of the small preset); a gait
+    speed above the servo's raises the servo's top speed to it."""
+    physics, robot, diagnostics, speed = split_settings(settings)
+    config = make_config('small', physics, robot, diagnostics=diagnostics)
     if speed is not None and speed > config.robot.servo_speed:
-        config = make_config('small', physics, {**robot, 'servo_speed': speed})
-    return config, speed if speed is not None else config.robot.servo_speed, extras
-
-
-def apply_extras(world: Physics, extras: dict[str, Any]) -> None:
-    """Bullet knobs that are not settings fields (yet), applied after the world is built."""
-    c = world.client
-    params: dict[str, Any] = {}
-    if 'x_split_impulse' in extras:
-        params['useSplitImpulse'] = int(bool(extras['x_split_impulse']))
-    if 'x_split_threshold' in extras:
-        params['splitImpulsePenetrationThreshold'] = float(extras['x_split_threshold'])
-    if 'x_rvt' in extras:
-        params['restitutionVelocityThreshold'] = float(extras['x_rvt'])
-    if 'x_cfm' in extras:
-        params['globalCFM'] = float(extras['x_cfm'])
-    if 'x_cone' in extras:
-        params['enableConeFriction'] = int(bool(extras['x_cone']))
-    if 'x_friction_erp' in extras:
-        params['frictionERP'] = float(extras['x_friction_erp'])
-    if params:
-        c.setPhysicsEngineParameter(**params)
-    if 'x_plate_restitution' in extras:
-        c.changeDynamics(world.plate_id, -1, restitution=float(extras['x_plate_restitution']))
-    if extras.get('x_tilt_inertia'):
-        # robots that stay flat: the body's roll / pitch inertia times this factor (yaw and mass unchanged)
-        for body in world.body_ids:
-            info = c.getDynamicsInfo(body, -1)
-            ixx, iyy, izz = info[2]
-            k = float(extras['x_tilt_inertia'])
-            c.changeDynamics(body, -1, localInertiaDiagonal=[ixx * k, iyy * k, izz])
-    if extras.get('x_contact_stiffness'):
-        for body in world.body_ids:
-            for link in (-1, *ARM_JOINTS):
-                c.changeDynamics(body, link, contactStiffness=float(extras['x_contact_stiffness']),
-                                 contactDamping=float(extras.get('x_contact_damping', 0.0)))
-    if extras.get('x_ccd'):
-        for body in world.body_ids:
-            for link in (-1, *ARM_JOINTS):
-                c.changeDynamics(body, link, ccdSweptSphereRadius=float(extras['x_ccd']))
+        config = make_config('small', physics, {**robot, 'servo_speed': speed}, diagnostics=diagnostics)
+    return config, speed if speed is not None else config.robot.servo_speed
 
 
 def make_world(settings: dict[str, Any], scene: Scene) -> Runner:
-    """The runner (physics + gait controller) of ``scene`` with the settings and extras applied."""
-    config, _, extras = study_config(settings)
-    run = Runner.with_gaits(config, scene)
-    apply_extras(run.physics, extras)
-    return run
+    """The runner (Bullet physics + gait controller) of ``scene`` with the settings and diagnostics applied."""
+    return Runner.with_gaits(study_config(settings)[0], scene)
+
+
+def bullet_world(run: Runner) -> Physics:
+    """The Bullet world of ``run`` (the study's instruments read Bullet's contact points)."""
+    assert isinstance(run.physics, Physics)
+    return run.physics
 
 
 def gait_for(settings: dict[str, Any], alpha_deg: float = 90.0, phase: float = 0.0) -> GaitConfig:
     """The square gait of a model."""
-    _, speed, _ = study_config(settings)
+    _, speed = study_config(settings)
     return GaitConfig.from_degrees(alpha_deg, servo_speed=speed, phase=phase)
 
 
@@ -143,13 +108,14 @@ def collide(settings: dict[str, Any], theta: float, phi: float, phases: tuple[fl
     up to 3 steps merged). Per collision: its duration, the separating impulses, dr during the contact,
     dr in the contact-free time that follows (coasting), the largest body speed after it.
     """
-    config, _, _ = study_config(settings)
+    config, _ = study_config(settings)
     gait = gait_for(settings, alpha)
     scene = pair_scene(config.robot, gait, r, math.radians(theta), math.radians(phi), phases)
     world = make_world(settings, scene)
-    c = world.physics.client
-    b1, b2 = world.physics.body_ids
-    plate = world.physics.plate_id
+    bullet = bullet_world(world)
+    c = bullet.client
+    b1, b2 = bullet.body_ids
+    plate = bullet.plate_id
     dt = config.physics.time_step
     ticks = world.ticks_for(periods * gait.period)
     assert world.gaits is not None
@@ -261,7 +227,7 @@ def summarise_trace(trace: dict[str, Any], period: float) -> dict[str, Any]:
 def drift_run(settings: dict[str, Any], heading_deg: float, periods: int = 20, skip: int = 2,
               alpha: float = 90.0) -> dict[str, Any]:
     """One robot alone: net drift per cycle (um) over ``periods`` after ``skip`` transient periods."""
-    config, _, _ = study_config(settings)
+    config, _ = study_config(settings)
     gait = gait_for(settings, alpha)
     a = gait.alpha_max
     scene = Scene((RobotPlacement(0.0, 0.0, math.radians(heading_deg), a, a, gait),), name='single')
@@ -298,7 +264,7 @@ def drift_run(settings: dict[str, Any], heading_deg: float, periods: int = 20, s
 def pair_run(settings: dict[str, Any], theta: float, phi: float, phases: tuple[float, float],
              periods: int = 100, r: float = 1.3) -> dict[str, Any]:
     """A pair from pair coordinates: per-period contact, r, COM; bound-run figures (contact-based)."""
-    config, _, _ = study_config(settings)
+    config, _ = study_config(settings)
     gait = gait_for(settings)
     scene = pair_scene(config.robot, gait, r, math.radians(theta), math.radians(phi), phases)
     world = make_world(settings, scene)
@@ -361,7 +327,7 @@ def dense_run(settings: dict[str, Any], seed: int, periods: int, n: int = 7, jit
               sample_every: int = 6) -> dict[str, Any]:
     """A dense scene run through the batch loop's metrics: trouble, max depth, gliders (contacts + 1.6 BL)."""
     from smarticle_tracking.gliders import GliderClass, GliderConfig, analyse_gliders
-    config, _, _ = study_config(settings)
+    config, _ = study_config(settings)
     gait = gait_for(settings)
     scene = dense_scene(config.robot, gait, n=n, seed=seed, phase_jitter=jitter)
     world = make_world(settings, scene)
@@ -477,7 +443,7 @@ def study_impact_trial(p: Mapping[str, Any], seed: int) -> StudyImpactResult:
     the effective restitution (separation / approach speed) mean, sd, min, max and the deepest overlap (mm)."""
     from smarticle_sim.impact import impact_sweep, summary
 
-    config, _, _ = study_config(_settings(p))
+    config, _ = study_config(_settings(p))
     impacts = impact_sweep(config.physics, config.robot, float(p['speed_m_s']), int(p['phases']))
     figures = summary(impacts)
     overlap_mm = 1e3 * figures.pop('overlap_max')
@@ -587,8 +553,8 @@ def basin_table(rows: list[StudyRow[Any]]) -> list[str]:
 
         def frac(sel: list[StudyRow[StudyPairResult]]) -> str:
             return _wilson_text(sum(bool(r.result.touch_last10) for r in sel), len(sel))
-        q14 = [r for r in rs if r.params['theta_deg'] < 90 or r.params['theta_deg'] >= 270]
-        q23 = [r for r in rs if 90 <= r.params['theta_deg'] < 270]
+        q14 = [r for r in rs if theta_quadrants(r.params['theta_deg']) == '1, 4']
+        q23 = [r for r in rs if theta_quadrants(r.params['theta_deg']) == '2, 3']
         anti = [r for r in rs if abs(r.params['phi_deg'] - 180) <= 45]
         par = [r for r in rs if min(r.params['phi_deg'], 360 - r.params['phi_deg']) <= 45]
         out.append(f"| {label} | {phase:g} | {len(rs)} | {frac(rs)} | "

@@ -44,6 +44,7 @@ from .errors import ResultError
 from .kinds import KINDS, MUJOCO_KINDS, read_result
 from .results import (AccuracyResult, DenseResult, GliderRecord, InadmissiblePairResult, P6Result,
                       PairResult, SingleResult, TrialResult)
+from .quantities import antiparallel_band, theta_quadrants
 from .spec import ExperimentSpec, Trial, canonical, seed_runs
 from .stats import Estimate, bootstrap_mean, fisher_p, kaplan_meier, logrank, wilson
 from .store import ResultStore, json_ready, write_atomic
@@ -464,20 +465,6 @@ BASIN_COLOURS = {'bound': 'tab:pink', 'repelled': 'tab:blue', 'neither': 'lightg
 #: How the basin section words the quadrant rule of ``theta_quadrants``.
 QUADRANT_RULE = ('theta 0 counts in quadrants 1, 4 and theta 180 in 2, 3 (each lies between two quadrants of its '
                  'pair); theta 90 and 270, the line between the pairs, count in neither')
-
-
-def theta_quadrants(theta_deg: float) -> str | None:
-    """The pair of quadrants a P4 start's theta (deg, any turn) lies in: '1, 4' in front of robot 1
-    (-90 < theta < 90), '2, 3' behind it (90 < theta < 270), None on the line between (theta 90 or 270)."""
-    theta = float(theta_deg) % 360.0
-    if theta in (90.0, 270.0):
-        return None
-    return '1, 4' if theta < 90.0 or theta > 270.0 else '2, 3'
-
-
-def antiparallel_band(phi_deg: float) -> bool:
-    """True when a P4 start's phi (deg, any turn) is in the antiparallel band 90 <= phi <= 270."""
-    return 90.0 <= float(phi_deg) % 360.0 <= 270.0
 
 
 #: The classes of P4 starts the basin table, its Fisher tests and its paper-against-sim rows count (quadrants:

@@ -47,7 +47,8 @@ from .kind import TrialKind
 from .kinds import KINDS, report_sections, resolve_kind, trial_function, validate_params
 
 SPEC_KEYS: tuple[str, ...] = ('name', 'description', 'tags', 'status', 'kind', 'store', 'preset', 'periods',
-                              'physics', 'robot', 'noise', 'params', 'analysis', 'grid', 'seeds', 'report', 'paper')
+                              'physics', 'robot', 'noise', 'diagnostics', 'params', 'analysis', 'grid', 'seeds',
+                              'report', 'paper')
 #: What a spec is for (``tags``): one of the paper's experiments, a speed or accuracy benchmark, a
 #: calibration of the sim against the paper, or a diagnostic of one question about the physics.
 TAGS: tuple[str, ...] = ('paper', 'benchmark', 'calibration', 'diagnostic')
@@ -304,6 +305,14 @@ def spec_from_mapping(data: Any, source: str = '') -> ExperimentSpec:
             raise SpecError(f'{name}: {group} overrides are not supported by kind {kind!r}')
         if values or known is None or group in base:
             base[group] = values
+    diagnostics = _mapping(name, 'diagnostics', data.get('diagnostics'))
+    if diagnostics:   # left out of the trial's parameters while empty (the shipped model)
+        bad = sorted(set(diagnostics) - groups.get('diagnostics', frozenset()))
+        if bad:
+            raise SpecError(f'{name}: unknown key diagnostics.{bad[0]} (not a diagnostics setting)')
+        if known is not None and 'diagnostics' not in known.params.GROUPS:
+            raise SpecError(f'{name}: diagnostics are not supported by kind {kind!r}')
+        base['diagnostics'] = diagnostics
     if data.get('noise') is not None:
         try:
             noise = noise_mapping(data['noise'])

@@ -28,7 +28,8 @@ from smarticle_common.params import ParamSpec
 from .camera import BACKENDS, CameraConfig, OverheadCamera
 from .errors import ConfigError
 from .scenes import SCENE_KINDS, Scene, build_scene
-from .settings import FRICTION_LENGTH, NoiseConfig, PhysicsConfig, SimConfig
+from .config_builder import build_config
+from .settings import FRICTION_LENGTH, PhysicsConfig, SimConfig
 from .physics import FsrReading, Physics
 from .runner import Runner
 
@@ -36,6 +37,9 @@ NODE_NAME = 'sim_bridge'
 #: Default wall seconds the lock-step bridge waits for a tick's joint commands (the first tick: the nodes' start).
 TICK_TIMEOUT, START_TIMEOUT = 10.0, 120.0
 _PHYSICS = PhysicsConfig()
+#: The parameters that are PhysicsConfig and NoiseConfig fields of the same names (``build_config``).
+BRIDGE_PHYSICS = ('time_step', 'control_tick', 'solver_iterations')
+BRIDGE_NOISE = ('friction_sd', 'friction_length')
 
 #: Every parameter of the sim bridge node, declared once (node) and shipped as config/sim_bridge.yaml.
 PARAMS: tuple[ParamSpec, ...] = (
@@ -151,13 +155,10 @@ class BridgeSettings:
         if values['scene'] not in SCENE_KINDS:
             raise ConfigError(f'{NODE_NAME}.scene must be one of {", ".join(SCENE_KINDS)}, '
                               f'got {values["scene"]!r}')
-        sim = SimConfig.from_preset(values['preset'], time_step=values['time_step'],
-                                    control_tick=values['control_tick'],
-                                    solver_iterations=values['solver_iterations'])
         # the friction field is physics, so the bridge applies it; clock rates and servo timing belong to
         # the gait nodes and the boards on this path (docs/sim_core.md, "Noise with a cause")
-        sim = sim.with_noise(NoiseConfig.none(), friction_sd=values['friction_sd'],
-                             friction_length=values['friction_length'])
+        sim = build_config(values['preset'], {name: values[name] for name in BRIDGE_PHYSICS},
+                           noise={name: values[name] for name in BRIDGE_NOISE})
         gait = GaitConfig.from_degrees(values['alpha_max_deg'], values['period'], sim.robot.servo_speed)
         try:
             camera = CameraConfig(

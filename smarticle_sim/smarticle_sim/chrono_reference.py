@@ -9,7 +9,7 @@ into ``.chrono/`` at the repository root (docs/chrono_reference.md). Without tha
 ``ChronoUnavailable`` with one line saying how to get it.
 
 The model is the authors' published pair code: each link a box with its mass and inertia (from
-``RobotSpec`` and ``PhysicsConfig.mass_model``, ``tilt_inertia_scale``, ``yaw_inertia_scale``, as in
+``RobotSpec``, ``PhysicsConfig.tilt_inertia_scale`` and ``Diagnostics.mass_model``, ``yaw_inertia_scale``, as in
 Bullet), the arms ``arm_clearance`` above the plate, a robot's own links never colliding; Chrono's smooth
 contact (SMC, Hertz, from Young's modulus, Poisson ratio, restitution and friction: ``ChronoSettings``) or
 its non-smooth one (NSC); the arms on rigid speed motors whose speed is a function of time alone: the
@@ -35,8 +35,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from smarticle_common.errors import RobotSpecError
-from smarticle_common.facts import robot_preset
 from smarticle_common.gait import GaitConfig, GaitError, open_loop_angles
 from smarticle_common.pairs import one_pair
 from smarticle_common.poses import body_headings_and_tilts
@@ -45,9 +43,10 @@ from smarticle_common.topics import FSR_FACES
 
 from .batch import check_run_request, scene_period
 from .errors import SceneError, SimError
-from .physics import arm_masses, authors_inertias, box_inertia
+from .config_builder import build_config
+from .diagnostics import arm_masses, authors_inertias, body_inertia_scales, box_inertia
 from .scenes import RobotPlacement, Scene, pair_scene
-from .settings import PhysicsConfig, SimConfig
+from .settings import SimConfig
 
 #: Environment variable naming the driver executable (default: ``DEFAULT_DRIVER``).
 DRIVER_ENV = 'SMARTICLE_CHRONO_DRIVER'
@@ -146,18 +145,17 @@ def _link(size: tuple[float, float, float], mass: float, inertia: Iterable[float
 
 def _robot_links(config: SimConfig) -> tuple[dict[str, Any], list[dict[str, Any]]]:
     """The body and the two arms of ``config``'s robot, with Bullet's masses and inertias."""
-    spec, ph = config.robot, config.physics
+    spec, ph, diag = config.robot, config.physics, config.diagnostics
     body_size = (spec.body_width, spec.body_depth, spec.body_height)
     arm_size = (spec.arm_length, spec.arm_thickness, spec.arm_height)
-    masses = arm_masses(spec, ph.mass_model)
-    if ph.mass_model == 'authors':
+    masses = arm_masses(spec, diag.mass_model)
+    if diag.mass_model == 'authors':
         body_inertia, *arm_inertias = authors_inertias(spec)
     else:
         body_inertia = box_inertia(spec.body_mass, *body_size)
         arm_inertias = [box_inertia(m, *arm_size) for m in masses]
-    ixx, iyy, izz = body_inertia
-    body_inertia = (ixx * ph.tilt_inertia_scale, iyy * ph.tilt_inertia_scale, izz * ph.yaw_inertia_scale)
-    body = _link(body_size, spec.body_mass, body_inertia)
+    scales = body_inertia_scales(ph.tilt_inertia_scale, diag)
+    body = _link(body_size, spec.body_mass, (i * k for i, k in zip(body_inertia, scales, strict=True)))
     arms = [_link(arm_size, m, inertia) for m, inertia in zip(masses, arm_inertias, strict=True)]
     return body, arms
 
@@ -309,7 +307,7 @@ def run_chrono(config: SimConfig, scene: Scene, periods: float, sample_every: in
 
 #: Parameters of ``pair_chrono_trial`` and their defaults (the project's pair kind's names and units).
 PAIR_CHRONO_DEFAULTS: dict[str, Any] = {
-    'preset': 'small', 'physics': {}, 'robot': {}, 'chrono': {},
+    'preset': 'small', 'physics': {}, 'robot': {}, 'diagnostics': {}, 'chrono': {},
     'alpha_max_deg': 90.0, 'servo_speed': None, 'r_bl': 1.3, 'theta_deg': 330.0, 'phi_deg': 180.0,
     'phase2': 0.0, 'periods': 40.0, 'sample_every': 3, 'hold_first': False,
     'r_bind_bl': 1.6, 'bound_tail': 10,
@@ -317,16 +315,10 @@ PAIR_CHRONO_DEFAULTS: dict[str, Any] = {
 
 
 def _config(p: Mapping[str, Any]) -> SimConfig:
-    """SimConfig of a trial's ``preset``, ``physics`` and ``robot`` (ConfigError / SimError on bad fields)."""
-    try:
-        robot = replace(robot_preset(str(p['preset'])), **dict(p.get('robot') or {}))
-    except (RobotSpecError, TypeError) as exc:
-        raise SimError(f'robot: {exc}') from None
-    try:
-        physics = replace(PhysicsConfig(), **dict(p.get('physics') or {}))
-    except TypeError as exc:
-        raise SimError(f'physics: {exc}') from None
-    return SimConfig(robot, physics)
+    """SimConfig of a trial's ``preset``, ``physics``, ``robot`` and ``diagnostics`` (``build_config`` for the
+    Chrono engine; ConfigError, a SimError, on bad fields)."""
+    return build_config(str(p['preset']), p.get('physics'), p.get('robot'),
+                        diagnostics=p.get('diagnostics'), engine='chrono')
 
 
 def _checked(params: Mapping[str, Any], defaults: Mapping[str, Any], kind: str) -> dict[str, Any]:
@@ -386,7 +378,7 @@ def pair_chrono_trial(params: Mapping[str, Any], seed: int) -> dict[str, Any]:
 
 #: Parameters of ``single_chrono_trial`` and their defaults (the project's single kind's names and units).
 SINGLE_CHRONO_DEFAULTS: dict[str, Any] = {
-    'preset': 'small', 'physics': {}, 'robot': {}, 'chrono': {},
+    'preset': 'small', 'physics': {}, 'robot': {}, 'diagnostics': {}, 'chrono': {},
     'alpha_max_deg': 90.0, 'servo_speed': None, 'periods': 20.0, 'sample_every': 3,
 }
 

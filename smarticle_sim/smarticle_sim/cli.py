@@ -27,6 +27,7 @@ from .errors import SimError
 from .scenes import Scene, build_scene
 from smarticle_common.facts import GAIT_PERIOD, PRESETS
 
+from .config_builder import build_config
 from .settings import NoiseConfig, SimConfig
 from smarticle_common.cli import add_version, closed_pipe_safe
 
@@ -93,7 +94,7 @@ def config_from_args(args: argparse.Namespace) -> SimConfig:
     given = (('time_step', args.time_step), ('control_tick', args.control_tick),
              ('solver_iterations', args.solver_iterations))
     physics = {name: value for name, value in given if value is not None}
-    return SimConfig.from_preset(args.preset, **physics).with_noise(noise_from_args(args))
+    return build_config(args.preset, physics, noise=noise_from_args(args))
 
 
 def noise_from_args(args: argparse.Namespace) -> NoiseConfig:

@@ -11,6 +11,10 @@ class ConfigError(SimError, ValueError):
     """An invalid simulation setting; the message names the field and the accepted values."""
 
 
+class NotConvergedWarning(UserWarning):
+    """A setting the simulation accepts but whose results are not converged in the time step."""
+
+
 class SceneError(SimError, ValueError):
     """A scene that cannot be simulated (overlapping robots, off the plate, bad pair coordinates)."""
 

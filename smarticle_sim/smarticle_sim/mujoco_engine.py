@@ -34,7 +34,7 @@ Young's modulus, Poisson ratio, restitution and effective curvature radius set h
 Chrono's default radius) and the two links' masses.
 
 FSR forces, noise and trouble checks are Bullet's where the engine allows (``MujocoPhysics``); the gait's
-commands go out at control ticks, as in Bullet. ``PhysicsConfig.mass_model`` 'authors' gives the links Bullet's
+commands go out at control ticks, as in Bullet. ``Diagnostics.mass_model`` 'authors' gives the links Bullet's
 masses and inertias of the authors' model. Not modelled here: a held robot.
 """
 
@@ -53,7 +53,7 @@ from smarticle_common.topics import FSR_FACES
 from .engine import EngineFactory, PhysicsState, robot_index
 from .errors import SimError
 from .noise import FrictionField
-from .physics import arm_masses, authors_inertias
+from .diagnostics import arm_masses, authors_inertias
 from .scenes import Scene
 from .settings import SimConfig
 from .trouble import check_penetration, check_state
@@ -169,10 +169,12 @@ def build_model(config: SimConfig, scene: Scene, settings: MujocoSettings,
     import mujoco   # here, so that the settings can be imported (e.g. to check a spec) without the engine
 
     spec, ph = config.robot, config.physics
-    masses = arm_masses(spec, ph.mass_model)
-    # the authors' model (``PhysicsConfig.mass_model``): Bullet's arm masses and every link's inertia, given
+    diag = config.diagnostics
+    diag.check_engine('mujoco')
+    masses = arm_masses(spec, diag.mass_model)
+    # the authors' model (``Diagnostics.mass_model``): Bullet's arm masses and every link's inertia, given
     # explicitly (an <inertial> element overrides the inertia MuJoCo takes from the geoms)
-    inertias = authors_inertias(spec) if ph.mass_model == 'authors' else None
+    inertias = authors_inertias(spec) if diag.mass_model == 'authors' else None
     if any(robot.held for robot in scene.robots):
         raise SimError('the MuJoCo engine holds no robot in place (RobotPlacement.held); run a held robot in '
                        'Bullet or Chrono')

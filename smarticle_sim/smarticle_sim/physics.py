@@ -24,13 +24,14 @@ import math
 from typing import Any, Sequence
 
 import numpy as np
-from smarticle_common.facts import RobotSpec
 from smarticle_common.poses import body_headings_and_tilts
 from smarticle_common.topics import FSR_FACES
 
 from smarticle_sim.quiet import BulletClient, pybullet, silenced_output
 
-from .settings import AUTHORS_ARM_MASS, AUTHORS_LINK_DENSITY, PhysicsConfig, SimConfig
+from . import diagnostics
+from .diagnostics import arm_masses, body_inertia_scales
+from .settings import PhysicsConfig, SimConfig
 from .engine import FsrReading as FsrReading   # its home was here: ``physics.FsrReading`` still names it
 from .engine import PhysicsState, robot_index
 from .errors import SimError
@@ -81,7 +82,7 @@ class Physics:
     # ----------------------------------------------------------------- construction
     def _build(self) -> None:
         """Create the plate and the robots and set the engine parameters once."""
-        c, ph, spec = self._client, self._physics, self.config.robot
+        c, ph, spec, diag = self._client, self._physics, self.config.robot, self.config.diagnostics
         configure_engine(c, ph, len(self.scene.robots))
         c.setGravity(0.0, 0.0, -ph.gravity)
         arm_friction, body_friction, plate_friction = ph.link_frictions()   # Bullet multiplies the pair's values
@@ -98,8 +99,6 @@ class Physics:
         plate_restitution = restitution   # Bullet multiplies the pair's values, like friction
         if ph.restitution_body_plate is not None:
             plate_restitution = ph.restitution_body_plate / restitution if restitution > 0.0 else 0.0
-        if ph.plate_friction_slip is not None:
-            plate_friction = 0.0       # friction is applied per contact point (``_apply_plate_friction``)
         c.changeDynamics(self.plate_id, -1, lateralFriction=plate_friction,
                          restitution=plate_restitution, rollingFriction=0.0, spinningFriction=0.0)
         soft = ph.soft_contact(spec.total_mass)
@@ -133,7 +132,7 @@ class Physics:
             body = c.createMultiBody(
                 0.0 if placement.held else spec.body_mass, body_shape, body_visual, [placement.x, placement.y, z],
                 c.getQuaternionFromEuler([0.0, 0.0, yaw]) if state is None else state.orientation,
-                linkMasses=list(arm_masses(spec, ph.mass_model)), linkCollisionShapeIndices=arm_shapes,
+                linkMasses=list(arm_masses(spec, diag.mass_model)), linkCollisionShapeIndices=arm_shapes,
                 linkVisualShapeIndices=arm_visuals,
                 linkPositions=[[-w / 2, 0.0, arm_z], [w / 2, 0.0, arm_z]], linkOrientations=[ident, ident],
                 linkInertialFramePositions=[[-half_l, 0.0, 0.0], [half_l, 0.0, 0.0]],
@@ -147,15 +146,11 @@ class Physics:
             for link in ARM_JOINTS:
                 c.changeDynamics(body, link, lateralFriction=arm_friction,
                                  rollingFriction=0.0, spinningFriction=0.0, jointDamping=0.0, **link_contact)
-            if ph.mass_model == 'authors':
-                for link, inertia in enumerate(authors_inertias(spec)):
-                    if link > 0 or not placement.held:
-                        c.changeDynamics(body, link - 1, localInertiaDiagonal=inertia)
-            if (ph.tilt_inertia_scale != 1.0 or ph.yaw_inertia_scale != 1.0) and not placement.held:
-                ixx, iyy, izz = c.getDynamicsInfo(body, -1)[2]
-                c.changeDynamics(body, -1, localInertiaDiagonal=[ixx * ph.tilt_inertia_scale,
-                                                                 iyy * ph.tilt_inertia_scale,
-                                                                 izz * ph.yaw_inertia_scale])
+            diagnostics.bullet_robot(c, body, placement.held, spec, diag)
+            scales = body_inertia_scales(ph.tilt_inertia_scale, diag)
+            if scales != (1.0, 1.0, 1.0) and not placement.held:
+                inertia = c.getDynamicsInfo(body, -1)[2]
+                c.changeDynamics(body, -1, localInertiaDiagonal=[i * k for i, k in zip(inertia, scales, strict=True)])
             if ph.ccd_swept_sphere_radius > 0.0:
                 for link in (-1, *ARM_JOINTS):
                     c.changeDynamics(body, link, ccdSweptSphereRadius=ph.ccd_swept_sphere_radius)
@@ -175,22 +170,18 @@ class Physics:
         self._robot_of_body = {b: k for k, b in enumerate(ids)}
         for k, placement in enumerate(self.scene.robots):
             self.send(k, (placement.alpha1, placement.alpha2), spec.servo_speed)
+        #: What the diagnostics run before each step (``Diagnostics.plate_friction_slip``), or None.
+        self._before_step = diagnostics.bullet_world(c, self.plate_id, self.body_ids, ARM_JOINTS,
+                                                     ph.friction_body_plate, diag)
 
     def _arm_shape(self, sign: float, arm_half: list[float]) -> int:
-        """The collision shape (``arm_ends``) of the arm of half extents ``arm_half`` along ``sign`` * x."""
-        c = self._client
-        half_l, half_t, half_h = arm_half
-        if self._physics.arm_ends == 'square':
-            return c.createCollisionShape(pybullet.GEOM_BOX, halfExtents=arm_half,
-                                          collisionFramePosition=[sign * half_l, 0.0, 0.0])
-        # 'round': a box between two vertical cylinders of the arm's thickness, the same overall extent. The
-        # compound's AABB is the box arm's, so Bullet gives the link the same inertia.
-        return c.createCollisionShapeArray(
-            shapeTypes=[pybullet.GEOM_BOX, pybullet.GEOM_CYLINDER, pybullet.GEOM_CYLINDER],
-            halfExtents=[[half_l - half_t, half_t, half_h], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
-            radii=[0.0, half_t, half_t], lengths=[0.0, 2.0 * half_h, 2.0 * half_h],
-            collisionFramePositions=[[sign * half_l, 0.0, 0.0], [sign * half_t, 0.0, 0.0],
-                                     [sign * (2.0 * half_l - half_t), 0.0, 0.0]])
+        """The collision shape of the arm of half extents ``arm_half`` along ``sign`` * x: the authors' box arm,
+        unless the diagnostics give it other ends."""
+        shape = diagnostics.bullet_arm_shape(self._client, sign, arm_half, self.config.diagnostics)
+        if shape is not None:
+            return shape
+        return self._client.createCollisionShape(pybullet.GEOM_BOX, halfExtents=arm_half,
+                                                  collisionFramePosition=[sign * arm_half[0], 0.0, 0.0])
 
     # ----------------------------------------------------------------- properties
     @property
@@ -292,40 +283,16 @@ class Physics:
     def step(self, n: int = 1) -> None:
         """Advance ``n`` physics steps (the runner adds controllers and trouble checks around them)."""
         step = self._client.stepSimulation
-        if self._physics.plate_friction_slip is None:
+        before = self._before_step
+        if before is None:
             for _ in range(n):
                 step()
         else:
             for _ in range(n):
-                self._apply_plate_friction()
+                before()
                 step()
         self._step_count += n
         self._state = None
-
-    def _apply_plate_friction(self) -> None:
-        """Apply ``plate_friction_slip``'s friction to every body-plate contact point of the last step.
-
-        Plain floats, not numpy: a few points per robot and step, where numpy's call overhead would dominate.
-        """
-        c, ph = self._client, self._physics
-        mu, slip = ph.friction_body_plate, float(ph.plate_friction_slip)   # type: ignore[arg-type]
-        moving: dict[int, tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...]]] = {}
-        for point in c.getContactPoints(bodyA=self.plate_id):
-            body, normal_force = point[2], point[9]
-            if point[4] != -1 or normal_force <= 0.0:
-                continue
-            if body not in moving:
-                linear, angular = c.getBaseVelocity(body)
-                moving[body] = (linear, angular, c.getBasePositionAndOrientation(body)[0])
-            (vx, vy, vz), (wx, wy, wz), (cx, cy, cz) = moving[body]
-            at = point[6]
-            nx, ny, nz = point[7]
-            rx, ry, rz = at[0] - cx, at[1] - cy, at[2] - cz
-            ux, uy, uz = vx + wy * rz - wz * ry, vy + wz * rx - wx * rz, vz + wx * ry - wy * rx
-            along = ux * nx + uy * ny + uz * nz
-            sx, sy, sz = ux - along * nx, uy - along * ny, uz - along * nz
-            scale = -mu * normal_force / max(math.sqrt(sx * sx + sy * sy + sz * sz), slip)
-            c.applyExternalForce(body, -1, (scale * sx, scale * sy, scale * sz), at, pybullet.WORLD_FRAME)
 
     def ticks_for(self, seconds: float) -> int:
         """Number of control ticks in ``seconds`` of sim time (rounded)."""
@@ -537,31 +504,6 @@ class Physics:
     def __exit__(self, *exc: object) -> None:
         """Disconnect the client."""
         self.close()
-
-
-def box_inertia(mass: float, size_x: float, size_y: float, size_z: float) -> tuple[float, float, float]:
-    """The principal moments of inertia (kg m^2) of a uniform box of ``mass`` and edge lengths ``size_*`` (m)."""
-    return (mass * (size_y ** 2 + size_z ** 2) / 12.0, mass * (size_x ** 2 + size_z ** 2) / 12.0,
-            mass * (size_x ** 2 + size_y ** 2) / 12.0)
-
-
-def arm_masses(spec: RobotSpec, mass_model: str) -> tuple[float, float]:
-    """The masses (kg) of arm 1 and arm 2 (joints 0 and 1) under ``PhysicsConfig.mass_model``."""
-    if mass_model == 'authors':
-        return AUTHORS_ARM_MASS, AUTHORS_LINK_DENSITY * spec.arm_length * spec.arm_thickness * spec.arm_height
-    return spec.arm_mass, spec.arm_mass
-
-
-def authors_inertias(spec: RobotSpec) -> tuple[tuple[float, float, float], ...]:
-    """Body, arm 1 and arm 2 inertias (kg m^2, link frames) of the authors' model: boxes of 100 kg/m^3.
-
-    Their code sets the body's and arm 1's masses after building the boxes, which leaves every link the
-    inertia of its 100 kg/m^3 box (``PhysicsConfig.mass_model``).
-    """
-    body = (spec.body_width, spec.body_depth, spec.body_height)
-    arm = (spec.arm_length, spec.arm_thickness, spec.arm_height)
-    arm_inertia = box_inertia(AUTHORS_LINK_DENSITY * math.prod(arm), *arm)
-    return box_inertia(AUTHORS_LINK_DENSITY * math.prod(body), *body), arm_inertia, arm_inertia
 
 
 def robot_link_contact(physics: PhysicsConfig, robot_mass: float) -> dict[str, float]:

@@ -8,24 +8,13 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
-from smarticle_common.errors import RobotSpecError
-from smarticle_common.facts import SMALL, RobotSpec, require_non_negative, require_positive, robot_preset
+from smarticle_common.facts import SMALL, RobotSpec, require_non_negative, require_positive
 
-from .errors import ConfigError
-
-#: The arm end shapes ``PhysicsConfig.arm_ends`` accepts.
-ARM_ENDS = ('square', 'round')
-#: ``PhysicsConfig.mass_model``: how a robot's mass and inertia are spread over its three links.
-MASS_MODELS = ('uniform', 'authors')
-#: The authors' published Chrono model of the small robot builds every link as a box of this density and then
-#: sets the mass of the body and of one arm only (``mass_model`` 'authors').
-AUTHORS_LINK_DENSITY = 100.0          # kg/m^3
-#: The mass (kg) their code gives the one arm whose mass it sets (the other keeps its 100 kg/m^3 box: 0.345 g).
-AUTHORS_ARM_MASS = 0.00319
-
+from .diagnostics import Diagnostics
+from .errors import ConfigError, NotConvergedWarning
 
 #: Soft contacts (``PhysicsConfig.contact_stiffness``): the largest contact-spring angle per step (rad; omega
 #: x time_step, omega = sqrt(k / (m / 2)) of one contact point) before Bullet's implicit integration takes
@@ -35,10 +24,6 @@ SOFT_CONTACT_MAX_OMEGA_DT = 0.03
 #: Bullet's own solver residual threshold (PyBullet's physics server sets it), what
 #: ``PhysicsConfig.solver_residual_threshold`` None leaves in place.
 BULLET_SOLVER_RESIDUAL_THRESHOLD = 1e-7
-
-
-class NotConvergedWarning(UserWarning):
-    """A setting the simulation accepts but whose results are not converged in the time step."""
 
 
 @dataclass(frozen=True)
@@ -125,39 +110,6 @@ class PhysicsConfig:
     #: own inertia runs clean (docs/calibration/paper_figures.md, "The robots' own roll and pitch inertia"),
     #: so nothing departs from the robot here any more.
     tilt_inertia_scale: float = 1.0
-    #: Factor on the body's yaw inertia (about the plate normal; mass and contacts unchanged). 1: a uniform box
-    #: of the body's mass, the default. The authors' published Chrono code keeps the inertia of a box of
-    #: density 100 kg/m^3 after setting the body's mass to 24.8 g, a yaw inertia 0.129 of the uniform body's;
-    #: measured on P1 as a diagnostic of whether their P1 rests on it (docs/calibration/paper_figures.md,
-    #: "The authors' light body"), not taken: a real body with a servo at each end is no lighter in yaw than uniform.
-    yaw_inertia_scale: float = 1.0
-    #: How the robot's mass is spread over its links. 'uniform' (the default): the body and two equal arms
-    #: of the robot's spec, each link with the inertia of a uniform box of its mass. 'authors': as the
-    #: authors' published Chrono code builds the small robot, every link's inertia that of a box of density
-    #: 100 kg/m^3 (the body's that of a 3.2 g box), the body's mass the spec's (24.8 g), arm 1 (the left
-    #: arm, joint 0) 3.19 g and arm 2 its 100 kg/m^3 box's 0.345 g (28.3 g in all). Measured as a
-    #: diagnostic of what lets the authors' in-phase pairs glide (docs/calibration/paper_figures.md, "The
-    #: authors' uneven arms"), not taken: a robot with one arm nine times heavier than the other is not the paper's
-    #: robot. The roll / pitch and yaw factors above multiply the body's inertia of either model.
-    mass_model: str = 'uniform'
-    #: Body-plate friction without static friction, as in the authors' smooth (SMC) Chrono contact. None
-    #: (the default): Bullet's Coulomb friction, which holds a body still under any sideways force below mu N.
-    #: A speed (m/s): Bullet's body-plate friction is off and every body-plate contact point gets a friction
-    #: force applied before each step, mu N_i v_i / max(|v_i|, plate_friction_slip) against its sliding
-    #: velocity v_i (N_i: its normal force of the step before), so below that speed friction is a viscous drag.
-    #: Chrono's Hertzian contact with the authors' values (E 2e7 Pa, nu 0.3, restitution 0.85, a 1e-4 s step,
-    #: its default 0.1 m curvature radius, four corner points under a 28-35 g robot) makes its tangential
-    #: force k_t v dt + g_t v below mu N, i.e. viscous up to about 7 mm/s. A diagnostic of whether the
-    #: authors' in-phase pairs glide because their plate has no static friction
-    #: (docs/calibration/paper_figures.md, "A plate without static friction"); not taken.
-    plate_friction_slip: float | None = None
-    #: The arms' ends in plan view. 'square': the authors' box arms (5.0 x 0.3 x 2.3 cm). 'round': the same
-    #: box with both vertical end edges rounded to the arm's half thickness (a stadium in plan view: a box
-    #: of length L - t between two vertical cylinders of diameter t, same length, height, mass and
-    #: inertia), so an arm tip slides round another arm instead of catching on a box corner. Measured as a
-    #: candidate for the hook that binds the paper's isolated pairs and rejected: no more isolated gliders
-    #: than square ends on P1's seeds (docs/calibration/paper_figures.md, "Round arm ends").
-    arm_ends: str = 'square'
     #: Compliant robot-robot contacts, as in the authors' smooth-contact (penalty) Chrono model: the
     #: stiffness (N/m) of a robot-robot contact point. None: Bullet's rigid contacts (the restitution as a
     #: velocity jump, overlaps pushed out by ``contact_erp``). If set, each robot-robot contact point is a
@@ -190,7 +142,7 @@ class PhysicsConfig:
                 raise ConfigError(f'PhysicsConfig.{name} must be an integer >= 1, got {value!r}')
         if self.friction_arm_arm is not None:
             require_positive(self, 'friction_arm_arm', error=ConfigError)
-        for name in ('servo_bandwidth', 'contact_stiffness', 'solver_residual_threshold', 'plate_friction_slip'):
+        for name in ('servo_bandwidth', 'contact_stiffness', 'solver_residual_threshold'):
             if getattr(self, name) is not None:
                 require_positive(self, name, error=ConfigError)
         for name in ('restitution_velocity_threshold', 'restitution_body_plate'):
@@ -198,12 +150,6 @@ class PhysicsConfig:
                 require_non_negative(self, name, error=ConfigError)
         require_non_negative(self, 'ccd_swept_sphere_radius', error=ConfigError)
         require_positive(self, 'tilt_inertia_scale', error=ConfigError)
-        require_positive(self, 'yaw_inertia_scale', error=ConfigError)
-        if self.mass_model not in MASS_MODELS:
-            raise ConfigError(f'PhysicsConfig.mass_model must be one of {", ".join(MASS_MODELS)}, '
-                              f'got {self.mass_model!r}')
-        if self.arm_ends not in ARM_ENDS:
-            raise ConfigError(f'PhysicsConfig.arm_ends must be one of {", ".join(ARM_ENDS)}, got {self.arm_ends!r}')
         if self.restitution_body_plate is not None and self.restitution_body_plate > 1.0:
             raise ConfigError(f'PhysicsConfig.restitution_body_plate must be in [0, 1], '
                               f'got {self.restitution_body_plate}')
@@ -372,30 +318,20 @@ class NoiseConfig:
 
 @dataclass(frozen=True)
 class SimConfig:
-    """Everything a Physics needs besides the scene: the robot spec and the physics settings."""
+    """Everything a Physics needs besides the scene: the robot spec, the physics settings, the noise and the
+    diagnostics. Made by ``config_builder.build_config`` (a preset, overrides, noise, engine)."""
 
     robot: RobotSpec = SMALL
     physics: PhysicsConfig = field(default_factory=PhysicsConfig)
     #: Noise with a cause; off by default (``NoiseConfig.none()``), see ``with_noise``.
     noise: NoiseConfig = field(default_factory=NoiseConfig.none)
+    #: Knobs measured and not taken (``diagnostics.Diagnostics``); the default is the shipped model.
+    diagnostics: Diagnostics = field(default_factory=Diagnostics)
 
     def __post_init__(self) -> None:
         """Refuse settings that cannot converge for this robot; warn about ones that converge poorly."""
         ph, spec = self.physics, self.robot
-        if ph.plate_friction_slip is not None:
-            if self.noise.friction_sd > 0.0:
-                raise ConfigError('PhysicsConfig.plate_friction_slip: the applied plate friction has no friction '
-                                  'field; set NoiseConfig.friction_sd to 0')
-            drag_per_step = ph.friction_body_plate * ph.gravity * ph.time_step / ph.plate_friction_slip
-            if drag_per_step > 1.0:
-                warnings.warn(f'PhysicsConfig.plate_friction_slip: {ph.plate_friction_slip:g} m/s at a '
-                              f'{ph.time_step:.6g} s step takes {drag_per_step:.2f} of a sliding speed in one step '
-                              f'(explicit drag; above 1 it overshoots): use a larger slip speed or a finer step',
-                              NotConvergedWarning, stacklevel=3)
-        if ph.mass_model == 'authors' and ((spec.body_width, spec.body_depth, spec.arm_length)
-                                           != (SMALL.body_width, SMALL.body_depth, SMALL.arm_length)):
-            raise ConfigError("PhysicsConfig.mass_model 'authors' is the authors' Chrono model of the paper's small "
-                              'robot; use it with the small preset')
+        self.diagnostics.check(spec, ph, self.noise.friction_sd)
         tip_travel = spec.servo_speed * spec.arm_length * ph.time_step     # arm tip per step at top speed
         if tip_travel >= spec.arm_thickness:
             raise ConfigError(f'PhysicsConfig.time_step: {ph.time_step:.6g} s lets an arm tip travel '
@@ -426,23 +362,13 @@ class SimConfig:
                           'bandwidth x time_step <= 0.5 (docs/sim_calibration.md)', NotConvergedWarning,
                           stacklevel=3)
 
-    @classmethod
-    def from_preset(cls, preset: str = 'small', **physics: Any) -> SimConfig:
-        """Build a config from a robot preset name and PhysicsConfig overrides."""
-        known = {f.name for f in fields(PhysicsConfig)}
-        unknown = sorted(set(physics) - known)
-        if unknown:
-            raise ConfigError(f'unknown PhysicsConfig field(s) {", ".join(unknown)}; '
-                              f'known: {", ".join(sorted(known))}')
-        try:
-            robot = robot_preset(preset)
-        except RobotSpecError as err:
-            raise ConfigError(str(err)) from None
-        return cls(robot, PhysicsConfig(**physics))
-
     def with_physics(self, **changes: Any) -> SimConfig:
         """Return a copy with some PhysicsConfig fields changed (validated)."""
         return replace(self, physics=replace(self.physics, **changes))
+
+    def with_diagnostics(self, **changes: Any) -> SimConfig:
+        """Return a copy with some Diagnostics fields changed (validated)."""
+        return replace(self, diagnostics=replace(self.diagnostics, **changes))
 
     def with_noise(self, noise: NoiseConfig | None = None, **changes: Any) -> SimConfig:
         """Return a copy with ``noise`` (default: ``NoiseConfig.paper()``), some of its fields changed."""

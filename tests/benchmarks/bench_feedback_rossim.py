@@ -28,14 +28,14 @@ from smarticle_common import topics
 from smarticle_common.launching import DomainReservation, ProcessGroup, isolated_ros_env
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))   # the repository root: tests.* helpers
-from smarticle_sim.settings import SimConfig
+from smarticle_sim.config_builder import build_config
 from smarticle_experiments.p6 import COLLIDING_START, Condition, c2_start, pair_lifetime, run_pair_trial
 from tests.benchmarks._common import markdown_table, out_path, write_csv
 
 START_AT = 0.5
 TICK = 1.0 / 60.0
 BL = 0.065
-SERVO_SPEED = SimConfig.from_preset('feedback').robot.servo_speed
+SERVO_SPEED = build_config('feedback').robot.servo_speed
 
 
 def ros_trial(seed: int, periods: float, workdir: Path, probe: object) -> dict[str, float]:

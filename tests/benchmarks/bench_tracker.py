@@ -27,7 +27,7 @@ from _common import figure, machine_line, markdown_table, out_path, write_csv
 from smarticle_common.gait import GaitConfig
 from smarticle_sim.camera import CameraConfig, OverheadCamera
 from smarticle_sim.scenes import dense_scene
-from smarticle_sim.settings import SimConfig
+from smarticle_sim.config_builder import build_config
 from smarticle_sim.runner import Runner
 from smarticle_bringup.sim_camera import sim_calibration
 from smarticle_tracking.tracker import TagTracker, TrackerConfig
@@ -37,7 +37,7 @@ RESOLUTIONS = ((640, 480), (1280, 720), (1920, 1080))
 
 def ground_truth(samples: int, seed: int = 1) -> list[tuple[np.ndarray, np.ndarray]]:
     """(poses, arm angles) of a 7-robot dense run sampled every 0.4 s (a quarter period)."""
-    config = SimConfig.from_preset('small')
+    config = build_config('small')
     gait = GaitConfig.from_degrees(90.0)
     out = []
     with Runner.with_gaits(config, dense_scene(config.robot, gait, 7, seed=seed)) as run:

@@ -73,9 +73,9 @@ def test_the_summary_says_how_many_samples_had_contact_and_where_those_pairs_sit
 def test_the_harvest_keeps_each_samples_pair_state_and_the_csv_gives_it_back_to_the_bit(tmp_path) -> None:
     from smarticle_experiments.c2_harvest import read_csv, write_csv
 
-    from smarticle_sim.settings import SimConfig
+    from smarticle_sim.config_builder import build_config
 
-    bl = SimConfig.from_preset('feedback').robot.body_length
+    bl = build_config('feedback').robot.body_length
     samples = harvest_trial(5002, periods=20.0, min_periods=5, settle=1)
     assert samples and all(s.state is not None for s in samples)
     for s in samples:

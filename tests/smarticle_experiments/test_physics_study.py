@@ -26,16 +26,19 @@ def test_a_lone_robots_drift_run_takes_the_amplitude_and_reports_the_bodys_tilt(
     assert abs(small['net_um'] - full['net_um']) > 1.0
 
 
-def test_settings_split_into_physics_robot_knobs_and_gait_speed() -> None:
-    physics, robot, extras, speed = split_settings({'time_step': 1 / 480.3, 'arm_mass': 0.005, 'x_rvt': 0.01,
-                                                    'gait_speed': 20.0})
+def test_settings_split_into_physics_robot_diagnostics_and_gait_speed() -> None:
+    physics, robot, diagnostics, speed = split_settings({'time_step': 1 / 480.3, 'arm_mass': 0.005, 'cfm': 0.01,
+                                                         'gait_speed': 20.0})
     assert physics == {'time_step': 1 / 480, 'control_tick': 1 / 60} and robot == {'arm_mass': 0.005}
     assert split_settings({'time_step': 1 / 250})[0]['control_tick'] == 1 / 250   # 1/60 s is no whole step count
-    assert extras == {'x_rvt': 0.01} and speed == 20.0
-    config, gait_speed, _ = study_config({'gait_speed': 20.0})
+    assert diagnostics == {'cfm': 0.01} and speed == 20.0
+    config, gait_speed = study_config({'gait_speed': 20.0, 'split_impulse': True})
     assert gait_speed == 20.0 and config.robot.servo_speed == 20.0   # the servo is made fast enough for the gait
+    assert config.diagnostics.split_impulse is True and config.diagnostics.changed == ('split_impulse',)
     with pytest.raises(SpecError, match='colour'):
         split_settings({'colour': 1})
+    with pytest.raises(SpecError, match='x_rvt'):   # the Bullet knobs are Diagnostics fields, by their own names
+        split_settings({'x_rvt': 0.01})
 
 
 def test_physics_study_runs_on_the_engine_and_prints_its_tables(tmp_path: Path,

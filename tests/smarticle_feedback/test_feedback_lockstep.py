@@ -18,6 +18,7 @@ from smarticle_common.gait import GaitConfig
 from smarticle_experiments.p6 import COLLIDING_START, c2_scene, default_feedback_config
 from smarticle_feedback.controller import ImpactController
 from smarticle_sim.bridge import BridgeSettings
+from smarticle_sim.config_builder import build_config
 from smarticle_sim.physics import Physics
 from smarticle_sim.runner import FeedbackController, GaitController, Runner
 from smarticle_sim.settings import SimConfig
@@ -32,7 +33,7 @@ PERIODS = 1.5
 
 def _start() -> tuple[SimConfig, dict[str, Any]]:
     """The feedback robot's config and the sim bridge parameters of seed SEED's C2 start."""
-    config = SimConfig.from_preset('feedback')
+    config = build_config('feedback')
     gait = GaitConfig.from_degrees(90.0, servo_speed=config.robot.servo_speed)
     _, (r, theta, phi) = c2_scene(config, gait, SEED, COLLIDING_START)   # collides at once: halts early
     phases = COLLIDING_START[3]

@@ -19,7 +19,7 @@ from smarticle_sim.chrono_reference import (ChronoSettings, ChronoUnavailable, c
                                             pair_chrono_trial, read_recording, run_chrono,
                                             scene_document, single_chrono_trial)
 from smarticle_sim.errors import SceneError, SimError
-from smarticle_sim.physics import box_inertia
+from smarticle_sim.diagnostics import box_inertia
 from smarticle_sim.scenes import RobotPlacement, Scene, pair_scene
 from smarticle_sim.settings import SimConfig
 
@@ -56,7 +56,7 @@ def test_scene_document_carries_the_robots_material_and_timing(config: SimConfig
 
 
 def test_scene_document_takes_the_authors_mass_model_and_inertia_factors(gait90: GaitConfig) -> None:
-    config = SimConfig().with_physics(mass_model='authors', yaw_inertia_scale=0.5)
+    config = SimConfig().with_diagnostics(mass_model='authors', yaw_inertia_scale=0.5)
     doc = scene_document(config, in_phase_pair(config, gait90), 1.6, 0.05, ChronoSettings())
     robot = doc['robots'][0]
     arm1, arm2 = (a['mass'] for a in robot['arms'])

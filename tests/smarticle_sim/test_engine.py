@@ -14,6 +14,7 @@ from smarticle_feedback.parameters import config_from_values, default_values
 
 from smarticle_experiments.p6 import COLLIDING_START
 from smarticle_sim.batch import run_trial
+from smarticle_sim.config_builder import build_config
 from smarticle_sim.engine import Engine
 from smarticle_sim.engines import engine_factory
 from smarticle_sim.errors import ConfigError, SceneError
@@ -26,7 +27,7 @@ from smarticle_sim.settings import NoiseConfig, SimConfig
 
 def colliding_pair() -> tuple[SimConfig, GaitConfig, Scene]:
     """P6's start where the feedback robots collide at once (seed 0: the start itself)."""
-    config = SimConfig.from_preset('feedback')
+    config = build_config('feedback')
     gait = GaitConfig.from_degrees(90.0, servo_speed=config.robot.servo_speed)
     r, theta, phi, phases = COLLIDING_START
     scene = pair_scene(config.robot, gait, r, math.radians(theta), math.radians(phi), phases=phases, seed=0)

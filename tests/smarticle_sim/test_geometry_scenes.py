@@ -91,9 +91,9 @@ def test_a_start_taken_from_a_running_trial_restores_every_robots_state() -> Non
     from smarticle_sim.physics import Physics
     from smarticle_sim.runner import Runner
     from smarticle_sim.scenes import RobotState, dense_scene, state_scene
-    from smarticle_sim.settings import SimConfig
+    from smarticle_sim.config_builder import build_config
 
-    config = SimConfig.from_preset('feedback')
+    config = build_config('feedback')
     gait = GaitConfig.from_degrees(90.0, servo_speed=config.robot.servo_speed)
     with Runner.with_gaits(config, dense_scene(config.robot, gait, 3, seed=4)) as runner:
         assert runner.gaits is not None
@@ -119,9 +119,9 @@ def test_a_start_taken_from_a_running_trial_restores_every_robots_state() -> Non
 
 def test_a_restored_scene_may_overlap_by_its_tolerance_and_no_more() -> None:
     from smarticle_sim.scenes import RobotState, state_scene
-    from smarticle_sim.settings import SimConfig
+    from smarticle_sim.config_builder import build_config
 
-    spec = SimConfig.from_preset('feedback').robot
+    spec = build_config('feedback').robot
     rest = RobotState(spec.body_height / 2.0, (0.0, 0.0, 0.0, 1.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0))
     # two robots side by side along their bodies' depth, their bodies overlapping by `depth` m
     def pair(depth: float) -> list[RobotPlacement]:

@@ -25,7 +25,7 @@ def p5_pair(config: SimConfig, gait: GaitConfig, phase2: float = 0.1) -> Scene:
 def test_the_mujoco_robots_are_the_bullet_robots(config: SimConfig, gait90: GaitConfig, mass_model: str) -> None:
     """Every link's centre of mass, mass and inertia are where and what Bullet has them (the authors' uneven
     arms too)."""
-    config = config.with_physics(mass_model=mass_model)
+    config = config.with_diagnostics(mass_model=mass_model)
     scene = p5_pair(config, gait90)
     model = build_model(config, scene, MujocoSettings())
     data = mujoco.MjData(model)

@@ -10,6 +10,8 @@ import pybullet
 import pytest
 
 from smarticle_common.gait import GaitConfig
+from smarticle_sim.config_builder import build_config
+from smarticle_sim.diagnostics import Diagnostics
 from smarticle_sim.errors import ConfigError
 from smarticle_sim.scenes import RobotPlacement, Scene, dense_scene
 from smarticle_sim.settings import BULLET_SOLVER_RESIDUAL_THRESHOLD, NotConvergedWarning, PhysicsConfig, SimConfig
@@ -30,7 +32,8 @@ def test_defaults_are_the_converged_model_of_the_calibration() -> None:
     assert ph.restitution == 0.80 and ph.contact_erp == 0.1 and ph.restitution_body_plate == 0.0
     assert ph.restitution_velocity_threshold == 0.01
     assert ph.friction_arm_arm is None and ph.friction_robot_robot == ph.friction_body_plate == 0.3
-    assert ph.ccd_swept_sphere_radius == 0.0 and ph.tilt_inertia_scale == 1.0 == ph.yaw_inertia_scale
+    assert ph.ccd_swept_sphere_radius == 0.0 and ph.tilt_inertia_scale == 1.0
+    assert not Diagnostics().active and SimConfig().diagnostics == Diagnostics()   # the shipped model
     old = PhysicsConfig(servo_bandwidth=None)
     assert old.servo_gain() == old.position_gain          # the per-step gain of the old servo loop
 
@@ -45,7 +48,7 @@ def test_servo_bandwidth_fixes_the_approach_whatever_the_step() -> None:
 @pytest.mark.parametrize('field', ['servo_bandwidth', 'tilt_inertia_scale', 'yaw_inertia_scale'])
 def test_non_positive_knobs_refused(field: str) -> None:
     with pytest.raises(ConfigError, match=field):
-        PhysicsConfig(**{field: 0.0})
+        (Diagnostics if field == 'yaw_inertia_scale' else PhysicsConfig)(**{field: 0.0})
 
 
 def test_large_packs_get_more_solver_iterations(config: SimConfig, gait90: GaitConfig) -> None:
@@ -89,7 +92,7 @@ def test_round_arm_ends_keep_the_arm_and_round_its_end_edges(config: SimConfig) 
     spec = config.robot
     shapes, inertia = {}, {}   # per arm_ends: the arm's collision shapes, its (mass, inertia diagonal)
     for ends in ('square', 'round'):
-        with Runner.with_gaits(config.with_physics(arm_ends=ends), lone_robot()) as run:
+        with Runner.with_gaits(config.with_diagnostics(arm_ends=ends), lone_robot()) as run:
             world = run.physics
             c, body = world.client, world.body_ids[0]
             shapes[ends] = c.getCollisionShapeData(body, ARM_JOINTS[0])
@@ -110,7 +113,7 @@ def test_round_arm_ends_keep_the_arm_and_round_its_end_edges(config: SimConfig) 
 
 def test_unknown_arm_ends_refused() -> None:
     with pytest.raises(ConfigError, match='arm_ends'):
-        PhysicsConfig(arm_ends='oval')
+        Diagnostics(arm_ends='oval')
 
 
 def test_soft_contacts_give_bullet_the_spring_and_the_damping_of_the_restitution(config: SimConfig) -> None:
@@ -168,7 +171,7 @@ def test_bullet_gets_the_yaw_inertia_and_only_it(config: SimConfig) -> None:
     with Runner.with_gaits(config, lone_robot()) as run:
         world = run.physics
         mass, _, inertia = world.client.getDynamicsInfo(world.body_ids[0], -1)[:3]
-    with Runner.with_gaits(config.with_physics(yaw_inertia_scale=0.129), lone_robot()) as run:
+    with Runner.with_gaits(config.with_diagnostics(yaw_inertia_scale=0.129), lone_robot()) as run:
         world = run.physics
         light_mass, _, light = world.client.getDynamicsInfo(world.body_ids[0], -1)[:3]
         run.run(60)
@@ -183,7 +186,7 @@ def test_bullet_gets_the_yaw_inertia_and_only_it(config: SimConfig) -> None:
 
 def test_bullet_gets_the_authors_masses_and_inertias(config: SimConfig) -> None:
     """``mass_model`` 'authors': 24.8 g body, arms of 3.19 and 0.345 g, every link the inertia of a 100 kg/m^3 box."""
-    authors = config.with_physics(mass_model='authors')
+    authors = config.with_diagnostics(mass_model='authors')
     with Runner.with_gaits(authors, lone_robot()) as run:
         info = [run.physics.client.getDynamicsInfo(run.physics.body_ids[0], link)[:3] for link in (-1, *ARM_JOINTS)]
     (body_mass, _, body_inertia), (arm1_mass, _, arm1_inertia), (arm2_mass, _, arm2_inertia) = info
@@ -199,9 +202,9 @@ def test_bullet_gets_the_authors_masses_and_inertias(config: SimConfig) -> None:
 
 def test_mass_model_refused_where_it_means_nothing(config: SimConfig) -> None:
     with pytest.raises(ConfigError, match='mass_model'):
-        PhysicsConfig(mass_model='measured')
+        Diagnostics(mass_model='measured')
     with pytest.raises(ConfigError, match="mass_model 'authors'"):
-        SimConfig.from_preset('feedback', mass_model='authors')
+        build_config('feedback', diagnostics={'mass_model': 'authors'})
 
 
 def creep(config: SimConfig, push: float, seconds: float = 0.5) -> tuple[float, float]:
@@ -225,7 +228,7 @@ def test_a_plate_without_static_friction_lets_a_small_push_creep(config: SimConf
     held, mu = creep(config, 0.3)
     assert held < 1e-4 and mu == pytest.approx(0.3)
     slip = 0.02
-    regularised = config.with_physics(plate_friction_slip=slip)
+    regularised = config.with_diagnostics(plate_friction_slip=slip)
     crept, bullet_mu = creep(regularised, 0.3)
     assert bullet_mu == 0.0                                                 # Bullet's own friction is off there
     assert crept == pytest.approx(0.3 * slip * 0.5, rel=0.25)               # v = push x slip, for 0.5 s
@@ -234,8 +237,8 @@ def test_a_plate_without_static_friction_lets_a_small_push_creep(config: SimConf
 
 def test_plate_friction_slip_refused_or_warned() -> None:
     with pytest.raises(ConfigError, match='plate_friction_slip'):
-        PhysicsConfig(plate_friction_slip=0.0)
+        Diagnostics(plate_friction_slip=0.0)
     with pytest.raises(ConfigError, match='plate_friction_slip'):
-        SimConfig().with_physics(plate_friction_slip=0.01).with_noise(friction_sd=0.06)
+        SimConfig().with_diagnostics(plate_friction_slip=0.01).with_noise(friction_sd=0.06)
     with pytest.warns(NotConvergedWarning, match='plate_friction_slip'):
-        SimConfig().with_physics(plate_friction_slip=0.001)
+        SimConfig().with_diagnostics(plate_friction_slip=0.001)

@@ -6,9 +6,9 @@ import math
 
 import pytest
 
+from smarticle_sim.config_builder import build_config
 from smarticle_sim.errors import ConfigError
-from smarticle_sim.settings import (PhysicsConfig, SimConfig,
-                                    steps_per_tick)
+from smarticle_sim.settings import (PhysicsConfig, steps_per_tick)
 
 
 @pytest.mark.parametrize('field, value', [('time_step', 0.0), ('time_step', -1e-3), ('solver_iterations', 0),
@@ -30,10 +30,10 @@ def test_control_tick_must_be_whole_steps() -> None:
         PhysicsConfig(time_step=0.01, control_tick=0.005)
 
 
-def test_from_preset_rejects_unknown_field() -> None:
-    assert SimConfig.from_preset('small', time_step=1 / 960, control_tick=1 / 60).physics.steps_per_tick == 16
+def test_build_config_rejects_unknown_field() -> None:
+    assert build_config('small', {'time_step': 1 / 960, 'control_tick': 1 / 60}).physics.steps_per_tick == 16
     with pytest.raises(ConfigError, match='timestep'):
-        SimConfig.from_preset('small', timestep=0.01)
+        build_config('small', {'timestep': 0.01})
 
 
 @pytest.mark.parametrize('arm_arm', [None, 0.3, 1.5])
@@ -52,20 +52,20 @@ def test_unreachable_plate_friction_refused() -> None:
 
 def test_a_step_that_lets_arms_pass_through_each_other_is_refused_with_the_field_named() -> None:
     with pytest.raises(ConfigError, match=r'PhysicsConfig\.time_step: .* more than the arm is thick'):
-        SimConfig.from_preset('small', time_step=1 / 120, control_tick=1 / 60)
+        build_config('small', {'time_step': 1 / 120, 'control_tick': 1 / 60})
     with pytest.raises(ConfigError, match=r'PhysicsConfig\.time_step'):
-        SimConfig.from_preset('small', time_step=0.1, control_tick=0.1)
+        build_config('small', {'time_step': 0.1, 'control_tick': 0.1})
 
 
 def test_a_coarse_step_or_a_fast_servo_is_warned_about() -> None:
     from smarticle_sim.settings import NotConvergedWarning
     with pytest.warns(NotConvergedWarning, match='PhysicsConfig.time_step'):
-        SimConfig.from_preset('small', time_step=1 / 240, control_tick=1 / 60)
+        build_config('small', {'time_step': 1 / 240, 'control_tick': 1 / 60})
     with pytest.warns(NotConvergedWarning, match='PhysicsConfig.servo_bandwidth'):
-        SimConfig.from_preset('small', servo_bandwidth=600.0)
+        build_config('small', {'servo_bandwidth': 600.0})
 
 
 def test_a_ccd_radius_larger_than_the_arm_is_refused() -> None:
     with pytest.raises(ConfigError, match='ccd_swept_sphere_radius'):
-        SimConfig.from_preset('small', ccd_swept_sphere_radius=0.002)
-    assert SimConfig.from_preset('small', ccd_swept_sphere_radius=0.001).physics.ccd_swept_sphere_radius == 0.001
+        build_config('small', {'ccd_swept_sphere_radius': 0.002})
+    assert build_config('small', {'ccd_swept_sphere_radius': 0.001}).physics.ccd_swept_sphere_radius == 0.001

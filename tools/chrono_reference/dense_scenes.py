@@ -39,6 +39,7 @@ from smarticle_sim.batch import run_trial
 from smarticle_sim.chrono_reference import ChronoSettings, run_chrono
 from smarticle_sim.mujoco_engine import MujocoSettings, run_mujoco
 from smarticle_sim.scenes import Scene, dense_scene
+from smarticle_sim.config_builder import build_config
 from smarticle_sim.settings import SimConfig
 from smarticle_tracking.gliders import GliderConfig, analyse_gliders
 
@@ -59,14 +60,14 @@ VERSUS = (('bullet', 'chrono'), ('mujoco', 'chrono'), ('bullet', 'mujoco'))
 
 def scene_of(seed: int, config: SimConfig | None = None, alpha_max_deg: float = 90.0) -> tuple[Scene, GaitConfig]:
     """The seed's dense scene (P1's start: ``ROBOTS`` robots, in phase) and its gait."""
-    config = config or SimConfig()
+    config = config or build_config()
     gait = GaitConfig.from_degrees(alpha_max_deg, servo_speed=config.robot.servo_speed)
     return dense_scene(config.robot, gait, n=ROBOTS, seed=seed), gait
 
 
 def run_engine(engine: str, seed: int, periods: float) -> Recording:
     """One dense scene in ``engine`` (ChronoUnavailable for chrono without the build)."""
-    config = SimConfig()
+    config = build_config()
     scene, _ = scene_of(seed, config)
     if engine == 'chrono':
         return run_chrono(config, scene, periods, SAMPLE_EVERY, ChronoSettings())

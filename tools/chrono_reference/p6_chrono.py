@@ -41,6 +41,7 @@ from smarticle_experiments.stats import fisher_p
 from smarticle_sim.batch import run_trial
 from smarticle_sim.chrono_reference import ChronoSettings, at_rest_scene, run_chrono
 from smarticle_sim.scenes import Scene, state_scene
+from smarticle_sim.config_builder import build_config
 from smarticle_sim.settings import SimConfig
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -55,7 +56,7 @@ SAMPLE_EVERY = 3
 
 def config_and_gait() -> tuple[SimConfig, GaitConfig]:
     """The feedback robot's default config and its 90 deg gait (phase 0)."""
-    config = SimConfig.from_preset(PRESET)
+    config = build_config(PRESET)
     return config, GaitConfig.from_degrees(ALPHA_MAX_DEG, servo_speed=config.robot.servo_speed)
 
 

@@ -35,7 +35,7 @@ from smarticle_sim.errors import SceneError
 from smarticle_sim.chrono_reference import ChronoSettings, ChronoUnavailable, pair_figures, run_chrono
 from smarticle_sim.mujoco_engine import MujocoSettings, run_mujoco
 from smarticle_sim.scenes import pair_scene
-from smarticle_sim.settings import SimConfig
+from smarticle_sim.config_builder import build_config
 
 COLUMNS = ('engine', 'step', 'phase2', 'seed', 'r_end_bl', 'phi_end_deg', 'travel_w', 'travel_w_per_100',
            'bound_tail_periods', 'colliding_tail_periods', 'trouble', 'wall_time_s')
@@ -43,7 +43,7 @@ COLUMNS = ('engine', 'step', 'phase2', 'seed', 'r_end_bl', 'phi_end_deg', 'trave
 
 def run_one(engine: str, step: float, phase2: float, seed: int, args: argparse.Namespace) -> dict[str, Any]:
     """One pair run in ``engine`` ('chrono', 'bullet' or 'mujoco') at ``step`` s; its figures."""
-    config = SimConfig() if engine in ('chrono', 'mujoco') else SimConfig().with_physics(time_step=step)
+    config = build_config(physics=None if engine in ('chrono', 'mujoco') else {'time_step': step})
     gait = GaitConfig.from_degrees(args.alpha_max, servo_speed=config.robot.servo_speed)
     scene = pair_scene(config.robot, gait, args.r, math.radians(args.theta), math.radians(args.phi),
                        (0.0, phase2), seed=seed)

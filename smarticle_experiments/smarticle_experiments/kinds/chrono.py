@@ -12,7 +12,7 @@ from smarticle_sim.chrono_reference import (CHRONO_FIELDS, ChronoSettings, Chron
                                             pair_chrono_trial, single_chrono_trial)
 from smarticle_sim.errors import SimError
 
-from ..configs import PHYSICS_FIELDS, ROBOT_FIELDS
+from ..configs import DIAGNOSTIC_FIELDS, PHYSICS_FIELDS, ROBOT_FIELDS
 from ..kind import KINDS
 from ..params import SimParams
 
@@ -31,7 +31,7 @@ class ChronoParams(SimParams):
     """A robot preset with overrides and a gait in Chrono: ``chrono`` sets ``ChronoSettings`` fields; no noise."""
 
     GROUPS: ClassVar[Mapping[str, frozenset[str]]] = {'physics': PHYSICS_FIELDS, 'robot': ROBOT_FIELDS,
-                                                      'chrono': CHRONO_FIELDS}
+                                                      'diagnostics': DIAGNOSTIC_FIELDS, 'chrono': CHRONO_FIELDS}
 
     chrono: Mapping[str, Any] = field(default_factory=dict)
     periods: float = 20.0

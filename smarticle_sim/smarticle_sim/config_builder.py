@@ -1,0 +1,88 @@
+"""The one builder of a run's SimConfig: a robot preset, overrides, noise and the engine that runs it.
+
+``build_config(preset, physics, robot, noise, diagnostics, engine)`` is how every caller makes a SimConfig:
+the sim CLI, the sim bridge, the experiments (``configs.make_config``), the demo and the Chrono reference.
+The names are the same everywhere: ``physics`` overrides ``PhysicsConfig`` fields, ``robot`` the preset's
+``RobotSpec`` fields, ``noise`` sets ``NoiseConfig`` fields, ``diagnostics`` the knobs measured and not taken
+(``diagnostics.Diagnostics``) and ``engine`` names the engine (``bullet``, ``mujoco`` or ``chrono``), which
+refuses the diagnostics and noise it does not build. A name that is no field raises ConfigError naming it and
+the known ones; a bad value raises the field's own ConfigError.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import fields, replace
+from typing import Any
+
+from smarticle_common.errors import RobotSpecError
+from smarticle_common.facts import RobotSpec, robot_preset
+
+from .diagnostics import Diagnostics
+from .engine import ENGINE_NAMES
+from .errors import ConfigError
+from .settings import NoiseConfig, PhysicsConfig, SimConfig
+
+#: The field names each group of ``build_config`` accepts (a spec's ``physics:``, ``robot:``, ``noise:`` and
+#: ``diagnostics:`` mappings use the same).
+PHYSICS_FIELDS: frozenset[str] = frozenset(f.name for f in fields(PhysicsConfig))
+ROBOT_FIELDS: frozenset[str] = frozenset(f.name for f in fields(RobotSpec)) - {'name'}
+NOISE_FIELDS: frozenset[str] = frozenset(f.name for f in fields(NoiseConfig))
+DIAGNOSTIC_FIELDS: frozenset[str] = frozenset(f.name for f in fields(Diagnostics))
+#: The engines a SimConfig can be built for: the engine interface's and the Chrono reference.
+CONFIG_ENGINES: tuple[str, ...] = (*ENGINE_NAMES, 'chrono')
+
+_GROUPS = {'physics': ('PhysicsConfig', PHYSICS_FIELDS), 'robot': ('RobotSpec', ROBOT_FIELDS),
+           'noise': ('NoiseConfig', NOISE_FIELDS), 'diagnostics': ('Diagnostics', DIAGNOSTIC_FIELDS)}
+
+
+class UnknownSettingError(ConfigError):
+    """A name given to ``build_config`` that is no field of its group."""
+
+
+def check_names(group: str, names: Mapping[str, Any] | None) -> None:
+    """Raise UnknownSettingError if a name of ``names`` is no field of ``group`` (physics, robot, noise or
+    diagnostics); the message names it and the known ones."""
+    cls_name, known = _GROUPS[group]
+    unknown = sorted(set(names or ()) - known)
+    if unknown:
+        raise UnknownSettingError(f'{group}.{unknown[0]} is not a {cls_name} field; '
+                                  f'known: {", ".join(sorted(known))}')
+
+
+def noise_config(noise: NoiseConfig | Mapping[str, Any] | str | None) -> NoiseConfig:
+    """The NoiseConfig of ``noise``: 'paper' (the cited figures), 'none' / None (off), a NoiseConfig, or a
+    mapping of NoiseConfig fields (the sources not named are off)."""
+    if isinstance(noise, NoiseConfig):
+        return noise
+    if noise is None or noise == 'none':
+        return NoiseConfig.none()
+    if noise == 'paper':
+        return NoiseConfig.paper()
+    if not isinstance(noise, Mapping):
+        raise ConfigError(f"noise must be 'paper', 'none' or a mapping of NoiseConfig fields, got {noise!r}")
+    check_names('noise', noise)
+    return replace(NoiseConfig.none(), **noise)
+
+
+def build_config(preset: str = 'small', physics: Mapping[str, Any] | None = None,
+                 robot: Mapping[str, Any] | None = None,
+                 noise: NoiseConfig | Mapping[str, Any] | str | None = None,
+                 diagnostics: Mapping[str, Any] | None = None, engine: str = 'bullet') -> SimConfig:
+    """The SimConfig of robot ``preset`` with PhysicsConfig / RobotSpec overrides, the noise of ``noise``
+    (``noise_config``) and ``diagnostics`` (Diagnostics fields), checked for ``engine``."""
+    check_names('physics', physics)
+    check_names('robot', robot)
+    check_names('diagnostics', diagnostics)
+    if engine not in CONFIG_ENGINES:
+        raise ConfigError(f'unknown engine {engine!r}: one of {", ".join(CONFIG_ENGINES)}')
+    try:
+        spec = replace(robot_preset(str(preset)), **dict(robot or {}))
+    except RobotSpecError as err:
+        raise ConfigError(str(err)) from None
+    extra = Diagnostics(**dict(diagnostics or {}))
+    extra.check_engine(engine)
+    noise_settings = noise_config(noise)
+    if engine == 'chrono' and noise_settings.enabled:
+        raise ConfigError('noise: the Chrono reference has no noise sources')
+    return SimConfig(spec, replace(PhysicsConfig(), **dict(physics or {})), noise_settings, extra)
