@@ -2,8 +2,9 @@
 
 Two labelled parts, each a run of ``smarticle_bringup/launch/sim.launch.xml`` through the project's launcher
 (the file ``ros2 launch`` reads on a board): the sim bridge in lock-step, one gait node per robot (and one
-feedback node per robot in part 2), the live glider monitor and a bag recorder, composed in one process on
-one executor (``--separate``: each its own process); with ``--view`` also the Foxglove live view. The demo
+feedback node per robot in part 2) composed in one process on one executor, the live glider monitor and a bag
+recorder each in a process of its own (``--separate``: every node its own process); with ``--view`` also the
+Foxglove live view. The demo
 listens to ``/smarticles/poses``, the joint states and the halts like any other node would, then finds the
 gliders with the glider analysis core, prints a table and writes figures, an animation, the poses and an mcap
 bag per part to ``out/demo/``.
@@ -366,10 +367,11 @@ def run_stack(part: Part, args: argparse.Namespace, folder: Path) -> StackRun:
     try:
         launch.start()
         driver = next(r for r in launch.running if r.node.on_exit_shutdown)   # the sim bridge, or its host
-        feedback = f'{n} feedback nodes + ' if part.feedback else ''
-        how = 'as separate processes' if args.separate else 'composed in one process (smarticle-compose)'
-        print(f'\n[demo] {part.key}: sim.launch.xml: sim bridge + {n} gait nodes + {feedback}glider monitor {how}, '
-              f'+ recorder{" + live view on ws://localhost:" + str(args.view_port) if args.view else ""} '
+        feedback = f' + {n} feedback nodes' if part.feedback else ''
+        how = 'as separate processes, + glider monitor' if args.separate else \
+            'composed in one process (smarticle-compose), + glider monitor'
+        print(f'\n[demo] {part.key}: sim.launch.xml: sim bridge + {n} gait nodes{feedback} {how}'
+              f' + recorder{" + live view on ws://localhost:" + str(args.view_port) if args.view else ""} '
               f'(domain {env["ROS_DOMAIN_ID"]}, logs in {shown(log_dir)}); simulating {part.periods:g} periods = '
               f'{duration:.1f} s', flush=True)
         wall0 = time.monotonic()
