@@ -4,6 +4,7 @@
     smarticle-experiments run p1 --trials 151                    # embedded LocalCluster, one worker per core
     smarticle-experiments run p1 --scheduler tcp://HOST:8786     # an existing Dask cluster
     smarticle-experiments run my_spec.yaml --periods 5 --seeds 0..2
+    smarticle-experiments run p7 --engine mujoco --report        # any simulated kind in MuJoCo too
     smarticle-experiments report p1
     smarticle-experiments report --summary                       # the status table of the paper's claims
     smarticle-experiments status p1
@@ -14,9 +15,10 @@
 
 Every command that runs trials runs them as trial kinds on the one Dask engine (``--workers``,
 ``--scheduler``) into the one store (``--out``). ``--trials N`` is N trials in all (a multiple of the spec's
-grid points); ``--seeds`` the seeds of every grid point. A shipped spec is found whatever its case. Bad input
-(unknown spec key or name, zero or negative count, empty grid, a scheduler that does not answer) prints one
-line naming the cause (for a name, the closest shipped ones) and exits with code 2, writing nothing.
+grid points); ``--seeds`` the seeds of every grid point; ``--engine`` the engine of its trials (the spec's
+``engine``, default bullet). A shipped spec is found whatever its case. Bad input (unknown spec key or name,
+zero or negative count, empty grid, a kind that does not run in the engine, a scheduler that does not answer)
+prints one line naming the cause (for a name, the closest shipped ones) and exits with code 2, writing nothing.
 """
 
 from __future__ import annotations
@@ -34,8 +36,9 @@ from smarticle_sim.settings import NotConvergedWarning
 from .errors import ExperimentError, SchedulerError, SpecError
 from .harness import PROG, RunOptions, add_engine_arguments, positive_float, positive_int, run_spec
 from .spec import STATUSES, TAGS, ExperimentSpec, archive_names, builtin_names, load_spec
-from .store import DEFAULT_ROOT, ResultStore, code_version
+from .kind import ENGINES
 from .kinds import KINDS
+from .store import DEFAULT_ROOT, ResultStore
 
 
 
@@ -72,6 +75,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help='only these seeds at every grid point (7, 1000..1029 or 1,5,10..12), in the same '
                             'store; the report is report-<name>-seeds-<ranges>')
         p.add_argument('--periods', type=positive_float, default=None, help='gait periods per trial')
+        p.add_argument('--engine', choices=ENGINES, default=None,
+                       help="the engine of the trials instead of the spec's (default: its engine field, else its "
+                            "kind's first, bullet); in another engine the spec is named <name>-<engine>, same store")
         if name == 'run':
             add_engine_arguments(p)
             p.add_argument('--report', action='store_true', help='write the report after the run')
@@ -91,7 +97,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def resolve(args: argparse.Namespace) -> ExperimentSpec:
     """The spec named on the command line with --trials / --seeds / --periods applied."""
-    spec = load_spec(args.spec)
+    spec = load_spec(args.spec, args.engine)
     if args.trials is not None and args.seeds is not None:
         raise SpecError('--trials and --seeds both choose the seeds: give one')
     if args.trials is not None:
@@ -174,11 +180,12 @@ def run_plan(spec: ExperimentSpec, args: argparse.Namespace) -> str:
 
     total = len(spec.points()) * len(spec.seeds)
     done = ResultStore(args.out / spec.store).done(args.retry_failed)
-    todo = total - len({t.key for t in spec.trials(code_version())} & done)
+    todo = total - len({t.key for t in spec.trials(spec.code())} & done)
     cores = REFERENCE_CORES if args.scheduler else (args.workers or os.cpu_count() or 1)
     where = f'{cores} {"core" if cores == 1 else "cores"}' + (
         f' (a cluster of N cores: {cores}/N of that)' if args.scheduler else '')
-    return (f'{spec.name}: {total} trials ({len(spec.points())} grid points x {len(spec.seeds)} seeds), '
+    return (f'{spec.name}: {total} trials ({len(spec.points())} grid points x {len(spec.seeds)} seeds) in '
+            f'{spec.engine}, '
             f'{todo} to run: about {duration_text(run_seconds(spec, cores, todo))} on {where} by the cost model '
             f'of docs/experiments.md')
 
@@ -207,7 +214,7 @@ def cmd_report(args: argparse.Namespace) -> int:
     if args.spec is None:
         raise SpecError('report: name a spec (or give --summary)')
     spec = resolve(args)
-    code = code_version()
+    code = spec.code()
     store = ResultStore(args.out / spec.store)
     trials = spec.trials(code)
     if not store.keys() & {t.key for t in trials}:
@@ -219,7 +226,7 @@ def cmd_report(args: argparse.Namespace) -> int:
 def cmd_status(args: argparse.Namespace) -> int:
     """Print counts of the spec's trials: done, failed (trial / engine), in trouble, missing."""
     spec = resolve(args)
-    code = code_version()
+    code = spec.code()
     store = ResultStore(args.out / spec.store)
     trials = spec.trials(code)
     keys = store.keys()

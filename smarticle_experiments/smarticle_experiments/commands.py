@@ -77,6 +77,8 @@ def p6_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--set', action='append', default=[], metavar='NAME=VALUE',
                         help='replace a PhysicsConfig field for every trial (repeatable), e.g. restitution=0.5')
     parser.add_argument('--quick', action='store_true', help='seeds 0..2, 30 periods, open loop 90 vs feedback 90')
+    parser.add_argument('--engine', choices=('bullet', 'mujoco'), default='bullet',
+                        help='the engine of the trials (default bullet); in MuJoCo the run is p6_run-mujoco')
 
 
 def p6_run(args: argparse.Namespace) -> int:
@@ -96,8 +98,9 @@ def p6_run(args: argparse.Namespace) -> int:
         ([{'alpha_max_deg': list(args.feedback), 'feedback': [True]}] if args.feedback else [])
     if not grid:
         raise SpecError('no condition to run: give --open-loop or --feedback amplitudes')
-    data = {'name': 'p6_run', 'description': 'C2 lifetimes, open loop against feedback', 'tags': ['paper'],
-            'kind': 'p6', 'store': 'p6_runs', 'periods': args.periods, 'noise': args.noise,
+    data = {'name': 'p6_run' if args.engine == 'bullet' else f'p6_run-{args.engine}',
+            'description': 'C2 lifetimes, open loop against feedback', 'tags': ['paper'],
+            'kind': 'p6', 'engine': args.engine, 'store': 'p6_runs', 'periods': args.periods, 'noise': args.noise,
             'physics': _assignments(args.set),
             'params': {'start': args.start, 'windows': windows, 'details': bool(args.contacts)},
             'grid': grid, 'report': ['p6']}

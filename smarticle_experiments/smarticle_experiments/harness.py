@@ -17,7 +17,7 @@ from typing import Any
 import yaml
 
 from .spec import ExperimentSpec, Trial, spec_from_mapping
-from .store import DEFAULT_ROOT, ResultStore, code_version
+from .store import DEFAULT_ROOT, ResultStore
 
 PROG = 'smarticle-experiments'
 
@@ -84,7 +84,7 @@ def run_spec(spec: ExperimentSpec, options: RunOptions) -> tuple[list[Trial], Re
     from .engine import dask_client, run_trials
     from .kinds import engine_missing
 
-    code = code_version()
+    code = spec.code()
     trials = spec.trials(code)
     store = ResultStore(options.out / spec.store)
     missing = engine_missing(spec.kind)   # checked once per spec, before any cluster starts
@@ -98,8 +98,9 @@ def run_spec(spec: ExperimentSpec, options: RunOptions) -> tuple[list[Trial], Re
     with dask_client(options.scheduler, options.workers) as client:   # connect before writing anything
         store.folder.mkdir(parents=True, exist_ok=True)
         (store.folder / f'spec-{spec.name}.yaml').write_text(yaml.safe_dump(
-            {'name': spec.name, 'kind': spec.kind, 'source': spec.source, 'base': dict(spec.base),
-             'grid': [dict(b) for b in spec.grid], 'seeds': list(spec.seeds), 'code': code}, sort_keys=False))
+            {'name': spec.name, 'kind': spec.kind, 'engine': spec.engine, 'source': spec.source,
+             'base': dict(spec.base), 'grid': [dict(b) for b in spec.grid], 'seeds': list(spec.seeds),
+             'code': code}, sort_keys=False))
         workers = len(client.nthreads())
         sys.stderr.write(f'{spec.name}: {len(trials)} trials, store {store.folder}, {workers} workers\n')
         try:

@@ -28,11 +28,26 @@ P = TypeVar('P', bound='KindParams')
 #: ``field`` metadata of a parameter left out of the stored mapping while None (added after stored trials
 #: existed, so their keys stay the same).
 OMIT_NONE: dict[str, bool] = {'omit_none': True}
+#: ``field`` metadata of a parameter left out of the stored mapping while it holds its default (added after
+#: stored trials existed, e.g. the engine: a Bullet trial's key stays the same).
+OMIT_DEFAULT: dict[str, bool] = {'omit_default': True}
 
 
 def optional(default: Any = None) -> Any:
     """A parameter that is left out of the stored mapping while it is None."""
     return field(default=default, metadata=OMIT_NONE)
+
+
+def omitted(f: Any) -> bool:
+    """Whether the dataclass field ``f`` is left out of the stored mapping when unset (``optional``,
+    ``OMIT_DEFAULT``)."""
+    return bool(f.metadata.get('omit_none') or f.metadata.get('omit_default'))
+
+
+def field_default(f: Any) -> Any:
+    """The default value of the dataclass field ``f`` (a fresh copy)."""
+    factory: Any = f.default_factory
+    return factory() if f.default is MISSING else copy.deepcopy(f.default)
 
 
 def first_line(exc: BaseException) -> str:
@@ -64,7 +79,8 @@ class KindParams:
     def as_dict(self) -> dict[str, Any]:
         """The stored mapping: every field in order (containers copied), optional ones only when set."""
         return {f.name: copy.deepcopy(getattr(self, f.name)) for f in fields(self)
-                if not (f.metadata.get('omit_none') and getattr(self, f.name) is None)}
+                if not (f.metadata.get('omit_none') and getattr(self, f.name) is None)
+                and not (f.metadata.get('omit_default') and getattr(self, f.name) == field_default(f))}
 
     @classmethod
     def names(cls) -> tuple[str, ...]:
@@ -73,23 +89,16 @@ class KindParams:
 
     @classmethod
     def defaults(cls) -> dict[str, Any]:
-        """The stored mapping of the default parameters."""
-        out = {}
-        for f in fields(cls):
-            if f.metadata.get('omit_none'):
-                continue
-            factory: Any = f.default_factory
-            out[f.name] = factory() if f.default is MISSING else copy.deepcopy(f.default)
-        return out
+        """The stored mapping of the default parameters (without those left out while unset)."""
+        return {f.name: field_default(f) for f in fields(cls) if not omitted(f)}
 
     @classmethod
     def checked_before(cls: type[P], data: Mapping[str, Any]) -> P:
         """The typed parameters of a stored mapping checked before (a spec's trial), without checking them again
         (no config is built, no warning repeated)."""
         out = object.__new__(cls)
-        defaults = cls.defaults()
         for f in fields(cls):
-            object.__setattr__(out, f.name, data[f.name] if f.name in data else defaults.get(f.name))
+            object.__setattr__(out, f.name, data[f.name] if f.name in data else field_default(f))
         return out
 
     @classmethod
@@ -122,7 +131,8 @@ class TrialKind(Generic[P]):
     result: type | None = None
     #: The result of a start that did not run (robots overlapping), told by ``admissible: false``.
     inadmissible: type | None = None
-    #: The engines it runs on (of ``ENGINES``), the one it runs on first.
+    #: The engines it runs on (of ``ENGINES``), its default first; a kind of several takes the engine as its
+    #: parameter ``engine`` (``params.EngineParams``), which a spec's ``engine`` sets.
     engines: tuple[str, ...] = ('bullet',)
     #: The report sections (``report.SECTIONS``) its results feed.
     sections: tuple[str, ...] = ()
@@ -140,13 +150,20 @@ class TrialKind(Generic[P]):
         bad = [e for e in self.engines if e not in ENGINES]
         if not self.engines or bad:
             raise ValueError(f'kind {self.name}: engines must be some of {", ".join(ENGINES)}, got {self.engines}')
+        if len(self.engines) > 1 and 'engine' not in self.params.names():
+            raise ValueError(f'kind {self.name}: runs on {", ".join(self.engines)}, so its parameters need an '
+                             f'engine field')
         if not self.modules:
             object.__setattr__(self, 'modules', (getattr(self.run, '__module__', ''),))
 
     @property
     def engine(self) -> str:
-        """The engine its trials run on."""
+        """The engine its trials run on unless a spec names another of ``engines``."""
         return self.engines[0]
+
+    def engine_of(self, data: Mapping[str, Any]) -> str:
+        """The engine a trial of the stored parameters ``data`` runs on."""
+        return str(data.get('engine') or self.engine)
 
     @property
     def defaults(self) -> dict[str, Any]:

@@ -41,7 +41,7 @@ from smarticle_sim.settings import BULLET_SOLVER_RESIDUAL_THRESHOLD
 from smarticle_tracking.gliders import MIN_PERIODS, GliderConfig, PairKind, pair_kind, rule_text, travel_rate
 
 from .errors import ResultError
-from .kinds import KINDS, MUJOCO_KINDS, read_result
+from .kinds import KINDS, read_result, trial_engine
 from .results import (AccuracyResult, DenseResult, GliderRecord, InadmissiblePairResult, P6Result,
                       PairResult, SingleResult, TrialResult)
 from .quantities import antiparallel_band, theta_quadrants
@@ -673,13 +673,13 @@ def section_step_convergence(ctx: Context) -> list[str]:
     # so the last is the reference; a variant = the trial's other grid values
     Setting = tuple[float, int, float]
     Variant = tuple[tuple[str, Any], ...]
-    # MuJoCo's trials (``MUJOCO_KINDS``) have their own step and no Bullet solver: iterations and threshold 0
+    # MuJoCo's trials (``trial_engine``) have their own step and no Bullet solver: iterations and threshold 0
     solver_keys = ('physics.time_step', 'physics.solver_iterations', 'physics.solver_residual_threshold',
                    'mujoco.time_step')
     by_setting: dict[tuple[Variant, Setting], list[GliderRecord]] = defaultdict(list)
     trials_at: dict[tuple[Variant, Setting], int] = defaultdict(int)
     for t, r in ctx.ok_gliders('step_convergence'):
-        if t.kind in MUJOCO_KINDS:
+        if trial_engine(t.kind, t.params) == 'mujoco':
             setting: Setting = (MujocoSettings(**dict(t.params.get('mujoco') or {})).time_step, 0, 0.0)
         else:
             ph = config_of(t.params).physics
@@ -1180,9 +1180,7 @@ def status_table(root: Path) -> str:
     from smarticle_sim.settings import NotConvergedWarning
 
     from .spec import builtin_names, load_spec
-    from .store import code_version
 
-    code = code_version()
     lines = ['| experiment | claim | paper | sim [95 % interval] | paper inside | trials used | report |',
              '| --- | --- | --- | --- | --- | ---: | --- |']
     for name in builtin_names():
@@ -1192,7 +1190,7 @@ def status_table(root: Path) -> str:
         if spec.status != 'current' or 'paper' not in spec.tags:
             continue
         store = ResultStore(root / spec.store)
-        trials = spec.trials(code)
+        trials = spec.trials(spec.code())
         records = stored_records(spec, trials, store)
         link = f'[report-{spec.name}]({store.folder / f"report-{spec.name}" / "report.md"})'
         if not records:

@@ -7,6 +7,7 @@ A spec file is a mapping with these keys (every other key is refused, naming it)
     tags: [paper]                 # what it is for: paper, benchmark, calibration, diagnostic (``TAGS``)
     status: current               # current or superseded (``list`` shows current specs, ``list --all`` all)
     kind: dense                   # trial kind (kinds.KINDS) or a user's importable module:function
+    engine: mujoco                # the engine of its trials, one of the kind's (default: its first, bullet)
     store: p1                     # optional store folder (specs that share trials share a store)
     preset: small                 # robot preset
     periods: 300                  # gait periods per trial (> 0)
@@ -14,6 +15,7 @@ A spec file is a mapping with these keys (every other key is refused, naming it)
     robot: {}                     # RobotSpec overrides
     noise: paper                  # noise with a cause: 'paper' (the cited figures), 'none' (the default)
                                   # or NoiseConfig fields, e.g. {clock_rate_sd: 0.003} (the others off)
+    mujoco: {time_step: 1.0e-4}   # MujocoSettings overrides (engine mujoco only)
     params: {robots: 7}           # the kind's scene / trial parameters (see `smarticle-experiments list -v`)
     analysis: {min_periods: 30}   # the kind's in-trial analysis parameters (same namespace as params)
     grid: {theta_deg: [0, 30]}    # parameter -> list of values; the trials are the product x seeds
@@ -24,7 +26,10 @@ A spec file is a mapping with these keys (every other key is refused, naming it)
 
 Grid keys may name an entry of a kind's mapping parameter (its ``GROUPS``: physics, robot, noise, mujoco,
 chrono fields) as ``physics.time_step`` / ``robot.arm_mass`` / ``noise.clock_rate_sd``. A spec without noise
-leaves ``noise`` out of the trial parameters, so its trial keys are those of a spec written before noise existed.
+leaves ``noise`` out of the trial parameters, so its trial keys are those of a spec written before noise existed;
+likewise a trial in its kind's default engine has no ``engine`` parameter (a Bullet trial's key is the one it had
+before kinds took an engine) and one in another engine has it (``engine: mujoco``), so the two never share a key.
+A kind that cannot run in the spec's engine is refused when the spec loads.
 """
 
 from __future__ import annotations
@@ -44,10 +49,12 @@ import yaml
 from .configs import noise_mapping
 from .errors import SpecError
 from .kind import TrialKind
-from .kinds import KINDS, report_sections, resolve_kind, trial_function, validate_params
+from .kind import ENGINES
+from .kinds import KINDS, kind_modules, report_sections, resolve_kind, trial_engine, trial_function, validate_params
 
-SPEC_KEYS: tuple[str, ...] = ('name', 'description', 'tags', 'status', 'kind', 'store', 'preset', 'periods',
-                              'physics', 'robot', 'noise', 'diagnostics', 'params', 'analysis', 'grid', 'seeds',
+SPEC_KEYS: tuple[str, ...] = ('name', 'description', 'tags', 'status', 'kind', 'engine', 'store', 'preset',
+                              'periods', 'physics', 'robot', 'noise', 'diagnostics', 'mujoco', 'params', 'analysis',
+                              'grid', 'seeds',
                               'report', 'paper')
 #: What a spec is for (``tags``): one of the paper's experiments, a speed or accuracy benchmark, a
 #: calibration of the sim against the paper, or a diagnostic of one question about the physics.
@@ -83,6 +90,18 @@ class ExperimentSpec:
     report: tuple[str, ...] = ()
     paper: Mapping[str, Any] = field(default_factory=dict)
     source: str = ''
+
+    @property
+    def engine(self) -> str:
+        """The engine its trials run on."""
+        return trial_engine(self.kind, self.base)
+
+    def code(self) -> dict[str, str]:
+        """The code version of its trials (``store.code_version``): the source of the modules its kind runs
+        (``kinds.kind_modules``), so an edit of another kind's module leaves its keys as they are."""
+        from .store import code_version
+
+        return code_version(kind_modules(self.kind))
 
     def with_trial_count(self, count: int) -> ExperimentSpec:
         """The same spec with ``count`` trials in all (``--trials``): seeds 0..count/G-1 at each of its G grid
@@ -231,6 +250,30 @@ def _grid_block(name: str, kind: str, known: TrialKind[Any] | None, block: Mappi
     return grid
 
 
+def _apply_engine(name: str, kind: str, known: TrialKind[Any] | None, data: Mapping[str, Any],
+                  base: dict[str, Any]) -> None:
+    """A spec's ``engine`` and ``mujoco`` into the base parameters: the engine only if it is not the kind's default
+    (so the keys of trials in the default engine stay those of a spec without one); SpecError if the kind does not
+    run in it."""
+    engine = data.get('engine')
+    if engine is not None:
+        if not isinstance(engine, str) or engine not in ENGINES:
+            raise SpecError(f'{name}: engine must be one of {", ".join(ENGINES)}, got {engine!r}')
+        engines = known.engines if known is not None else ('bullet', 'mujoco')
+        if engine not in engines:
+            raise SpecError(f'{name}: kind {kind!r} runs in {" or ".join(engines)}, not in {engine}')
+        if engine != (known.engine if known is not None else 'bullet'):
+            base['engine'] = engine
+    mujoco = _mapping(name, 'mujoco', data.get('mujoco'))
+    if mujoco:
+        bad = sorted(set(mujoco) - groups_of(None).get('mujoco', frozenset()))
+        if bad:
+            raise SpecError(f'{name}: unknown key mujoco.{bad[0]} (not a MujocoSettings field)')
+        if known is not None and 'mujoco' not in known.params.GROUPS:
+            raise SpecError(f'{name}: mujoco settings are not supported by kind {kind!r}')
+        base['mujoco'] = {**dict(base.get('mujoco') or {}), **mujoco}
+
+
 def spec_seeds(name: str, value: Any) -> tuple[int, ...]:
     """Seeds from a count, a list, {start, count} or the stack's seed syntax as text ('1000..1029',
     ``smarticle_common.cli.parse_seeds``); SpecError for zero, negative or non-integers."""
@@ -322,6 +365,7 @@ def spec_from_mapping(data: Any, source: str = '') -> ExperimentSpec:
             raise SpecError(f'{name}: noise is not supported by kind {kind!r}')
         if noise:
             base['noise'] = noise
+    _apply_engine(name, kind, known, data, base)
     if 'preset' in data:
         if known is not None and 'preset' not in known.defaults:
             raise SpecError(f'{name}: preset is not supported by kind {kind!r}')
@@ -417,9 +461,10 @@ def builtin_name(name: str) -> str:
                     f'`smarticle-experiments list` shows the {len(names)} shipped specs')
 
 
-def load_spec(name_or_path: str) -> ExperimentSpec:
+def load_spec(name_or_path: str, engine: str | None = None) -> ExperimentSpec:
     """Load a shipped spec by name (``p1``, any case) or a user's YAML file by path; SpecError if missing or
-    invalid."""
+    invalid. ``engine`` (``--engine``) replaces the spec's engine: in another engine than its own the spec is
+    named ``<name>-<engine>`` (its report sits beside the spec's own), in the same store."""
     path = Path(name_or_path)
     if not (path.suffix in ('.yaml', '.yml') or path.exists()):
         path = builtin_dir() / f'{builtin_name(name_or_path)}.yaml'
@@ -429,4 +474,20 @@ def load_spec(name_or_path: str) -> ExperimentSpec:
         data = yaml.safe_load(path.read_text())
     except yaml.YAMLError as exc:
         raise SpecError(f'{path}: not valid YAML ({str(exc).splitlines()[0]})') from None
+    if engine is not None:
+        data = with_engine(data, engine)
     return spec_from_mapping(data, str(path))
+
+
+def with_engine(data: Any, engine: str) -> Any:
+    """A spec mapping in ``engine``: its ``engine`` replaced and, unless that is its own engine already, named
+    ``<name>-<engine>`` in the same store (a mapping without a usable name or kind is left to
+    ``spec_from_mapping`` to refuse)."""
+    if not isinstance(data, Mapping) or not isinstance(data.get('name'), str):
+        return data
+    kind = data.get('kind')
+    known = KINDS.get(kind) if isinstance(kind, str) else None
+    own = data.get('engine') or (known.engine if known is not None else 'bullet')
+    if engine == own:
+        return {**data, 'engine': engine}
+    return {**data, 'engine': engine, 'name': f'{data["name"]}-{engine}', 'store': data.get('store', data['name'])}

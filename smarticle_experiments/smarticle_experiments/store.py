@@ -31,19 +31,24 @@ from typing import Any
 
 from . import __version__
 from .errors import StoreError
-from .trial_code import exported_module, source_hash
+from .trial_code import exported_module, locate, source_hash
 from .trials import code_versions
 
 DEFAULT_ROOT = Path('out/experiments')
-#: The worker's entry point (package, exported name): the module it comes from imports the code of every built-in
-#: trial kind, so that module and what it imports are the trial code of the default code version.
+#: The worker's entry point (package, exported name): the module it comes from is the package of the built-in
+#: trial kinds, one module each, so that package's modules and what they import are the trial code of every kind.
 RUN_ENTRY: tuple[str, str] = ('smarticle_experiments', 'run_kind')
 
 
 def trial_modules(path: Sequence[Path] | None = None) -> tuple[str, ...]:
-    """The modules whose code the built-in trial kinds run, as entries of ``trial_code.source_hash``: the module
-    of the worker's entry point ``RUN_ENTRY``."""
-    return (exported_module(*RUN_ENTRY, path),)
+    """The modules whose code the built-in trial kinds run together, as entries of ``trial_code.source_hash``:
+    the package of the worker's entry point ``RUN_ENTRY`` and each of its modules (a spec's trials are keyed by
+    their own kind's modules, ``kinds.kind_modules``)."""
+    package = exported_module(*RUN_ENTRY, path)
+    init = locate(package, path)
+    kinds = sorted(p.stem for p in init.parent.glob('*.py') if p.stem != '__init__') \
+        if init is not None and init.name == '__init__.py' else []
+    return (package, *(f'{package}.{name}' for name in kinds))
 
 
 @lru_cache(maxsize=1)
@@ -63,9 +68,9 @@ def head_commit() -> str:
 
 def code_version(modules: Iterable[str] | None = None, path: Sequence[Path] | None = None) -> dict[str, str]:
     """The code version a trial key includes: the package version, the hash of the source of every project
-    module ``modules`` (default ``trial_modules()``: every built-in kind's) run (``trial_code.source_hash``,
-    cached per process; ``path``: the folders to find the packages in, default where Python imports them from)
-    and the engines' library versions."""
+    module ``modules`` (a kind's, ``kinds.kind_modules``; default ``trial_modules()``: every built-in kind's) run
+    (``trial_code.source_hash``, cached per process; ``path``: the folders to find the packages in, default where
+    Python imports them from) and the engines' library versions."""
     entries = trial_modules(path) if modules is None else tuple(modules)
     return {'smarticle_experiments': __version__, 'source': source_hash(entries, path), **code_versions()}
 

@@ -122,7 +122,7 @@ def test_run_says_the_trials_and_their_run_time_before_it_starts(tmp_path: Path)
 
     args = build_parser().parse_args(['run', 'p4', '--workers', '2', '--out', str(tmp_path / 'out')])
     line = run_plan(resolve(args), args)
-    assert line.startswith('p4: 1152 trials (1152 grid points x 1 seeds), 1152 to run: about '), line
+    assert line.startswith('p4: 1152 trials (1152 grid points x 1 seeds) in bullet, 1152 to run: about '), line
     assert re.search(r'about \d+ min on 2 cores', line), line
     args = build_parser().parse_args(['run', 'p1', '--trials', '10', '--workers', '1', '--out', str(tmp_path)])
     assert re.search(r'p1: 10 trials .* 10 to run: about \d+ min on 1 core ', run_plan(resolve(args), args))
@@ -136,13 +136,13 @@ def test_report_of_a_spec_never_run_says_so(tmp_path: Path, capsys: pytest.Captu
 def test_a_report_over_some_of_the_seeds_sits_beside_the_whole_ones(tmp_path: Path,
                                                                    capsys: pytest.CaptureFixture[str]) -> None:
     from smarticle_experiments.spec import load_spec
-    from smarticle_experiments.store import ResultStore, code_version
+    from smarticle_experiments.store import ResultStore
 
     path = spec_file(tmp_path, name='lone', kind='single', params={}, seeds={'start': 10, 'count': 4},
                      report=['drift'])
     spec = load_spec(path)
     store = ResultStore(tmp_path / 'out' / spec.store)
-    for t in spec.trials(code_version()):
+    for t in spec.trials(spec.code()):
         store.write({'key': t.key, 'kind': t.kind, 'seed': t.seed, 'point': {}, 'status': 'ok',
                      'result': {'drift_um_per_cycle': float(t.seed), 'trouble': '', 'heading_deg': 0.0, 'cycles': 20,
                                 'step_um_per_cycle': float(t.seed)}})

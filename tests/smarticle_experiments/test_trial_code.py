@@ -86,6 +86,23 @@ def test_an_edit_of_trial_code_rekeys_stored_trials_and_an_edit_of_the_report_do
     assert not found()
 
 
+def test_an_edit_of_one_kind_s_module_rekeys_that_kind_and_not_another(tmp_path: Path) -> None:
+    """A spec's trials are keyed by the code of their own kind (``ExperimentSpec.code``): the kinds' package imports
+    its kinds by name, so one kind's module is not in another's trial code; what both run re-keys both."""
+    from smarticle_experiments.kinds import KINDS
+
+    path = copy_tree(tmp_path / 'tree')
+    single, dense = KINDS['single'].modules, KINDS['dense'].modules
+    assert 'smarticle_experiments.kinds.dense' not in module_files(single, path)
+    assert load_spec('p7').code() == code_version(single)
+    before = code_version(single, path), code_version(dense, path)
+    edit(path, 'smarticle_experiments.kinds.single', '\n# a change of the lone robot\'s trial\n')
+    assert code_version(single, path) != before[0]
+    assert code_version(dense, path) == before[1]
+    edit(path, 'smarticle_experiments.params', '\n# a change both kinds run\n')
+    assert code_version(dense, path) != before[1]
+
+
 def test_uncommitted_edits_are_keyed_by_their_content(tmp_path: Path) -> None:
     path = copy_tree(tmp_path / 'tree')
     first = source_hash(trial_modules(path), path)

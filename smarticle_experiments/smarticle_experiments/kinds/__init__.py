@@ -2,6 +2,9 @@
 
 Importing this package imports every built-in kind's module, which registers its kind in ``kind.KINDS``
 (``dense``, ``pair``, ``single``, ``accuracy``, ``p6``, ``c2_harvest``, the Chrono kinds, the physics study's).
+It imports them by name (``BUILT_IN_NAMES``), not by import statements, so that the trial code of one kind
+(``trial_code``, which follows import statements, and this package's ``__init__`` runs before any kind's module)
+is its own module and what that imports, not every other kind's: an edit of one kind re-keys that kind only.
 A kind outside the package (a user's, a test's) registers itself the same way when its module is imported;
 a spec may also name a plain function as ``module:function`` (untyped parameters, a dict result).
 
@@ -19,13 +22,15 @@ from typing import Any
 from ..errors import SpecError
 from ..kind import KINDS, KindParams, TrialKind
 from ..results import TrialResult
-from . import accuracy, c2_harvest, chrono, dense, p6, pair, single, study
 
-__all__ = ['KINDS', 'CHRONO_KINDS', 'MUJOCO_KINDS', 'BUILT_IN', 'engine_missing', 'read_result', 'report_sections',
-           'resolve_kind', 'run_kind', 'trial_function', 'trial_params', 'validate_params']
+__all__ = ['KINDS', 'CHRONO_KINDS', 'MUJOCO_KINDS', 'BUILT_IN', 'BUILT_IN_NAMES', 'engine_missing', 'kind_modules',
+           'read_result', 'report_sections', 'resolve_kind', 'run_kind', 'trial_engine', 'trial_function',
+           'trial_params', 'validate_params']
 
-#: The modules of the built-in kinds.
-BUILT_IN: tuple[Any, ...] = (dense, pair, single, accuracy, p6, c2_harvest, chrono, study)
+#: The modules of the built-in kinds, in this package (``store.trial_modules`` lists this folder alike).
+BUILT_IN_NAMES: tuple[str, ...] = ('dense', 'pair', 'single', 'accuracy', 'p6', 'c2_harvest', 'chrono', 'study')
+#: The modules of the built-in kinds, imported.
+BUILT_IN: tuple[Any, ...] = tuple(importlib.import_module(f'{__name__}.{name}') for name in BUILT_IN_NAMES)
 #: The built-in kinds stepped by MuJoCo (``smarticle_sim.mujoco_engine``) instead of Bullet.
 MUJOCO_KINDS: frozenset[str] = KINDS.on('mujoco')
 #: The built-in kinds run by the Chrono reference driver (``smarticle_sim.chrono_reference``), where it is built.
@@ -49,6 +54,20 @@ def engine_missing(kind: str) -> str | None:
     the Chrono driver, tools/chrono_reference/build_chrono.sh)."""
     known = KINDS.get(kind)
     return known.unavailable() if known is not None and known.unavailable is not None else None
+
+
+def kind_modules(kind: str) -> tuple[str, ...]:
+    """The modules whose code a trial of ``kind`` runs (``trial_code`` follows their imports): a registered kind's
+    ``modules``, a ``module:function`` kind's module."""
+    known = resolve_kind(kind)
+    return known.modules if known is not None else (kind.partition(':')[0],)
+
+
+def trial_engine(kind: str, params: Mapping[str, Any]) -> str:
+    """The engine a trial of ``kind`` with the stored parameters ``params`` runs on (a ``module:function`` kind:
+    its ``engine`` parameter, else Bullet)."""
+    known = KINDS.get(kind)
+    return known.engine_of(params) if known is not None else str(params.get('engine') or 'bullet')
 
 
 def trial_function(kind: str) -> Callable[[Any, int], Any]:

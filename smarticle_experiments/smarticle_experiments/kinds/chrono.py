@@ -13,7 +13,7 @@ from smarticle_sim.chrono_reference import (CHRONO_FIELDS, ChronoSettings, Chron
 from smarticle_sim.errors import SimError
 
 from ..configs import DIAGNOSTIC_FIELDS, PHYSICS_FIELDS, ROBOT_FIELDS
-from ..kind import KINDS
+from ..kind import KINDS, OMIT_DEFAULT
 from ..params import SimParams
 
 
@@ -32,7 +32,9 @@ class ChronoParams(SimParams):
 
     GROUPS: ClassVar[Mapping[str, frozenset[str]]] = {'physics': PHYSICS_FIELDS, 'robot': ROBOT_FIELDS,
                                                       'diagnostics': DIAGNOSTIC_FIELDS, 'chrono': CHRONO_FIELDS}
+    ENGINES: ClassVar[tuple[str, ...]] = ('chrono',)
 
+    engine: str = field(default='chrono', metadata=OMIT_DEFAULT)
     chrono: Mapping[str, Any] = field(default_factory=dict)
     periods: float = 20.0
     sample_every: int = 3

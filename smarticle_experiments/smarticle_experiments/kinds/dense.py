@@ -1,4 +1,5 @@
-"""The ``dense`` kind (P1, P2, P3): N robots densely packed, in phase (or jittered); their gliders."""
+"""The ``dense`` kind (P1, P2, P3): N robots densely packed, in phase (or jittered); their gliders; in Bullet or
+(a spec's ``engine: mujoco``) MuJoCo."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ from smarticle_sim.scenes import dense_scene
 
 from ..cost_model import sim_cpu_seconds
 from ..kind import KINDS
-from ..params import GliderParams
+from ..params import SIM_ENGINES, GliderParams
 from ..results import DenseResult
 from ..trials import add_contact_fractions, analyse_recording
 
@@ -32,8 +33,8 @@ class DenseParams(GliderParams):
 
 
 @KINDS.register('dense', DenseParams, 'N robots densely packed (P1, P2, P3)', result=DenseResult,
-                sections=('p1', 'trajectories', 'configurations', 'lifetimes', 'contacts'),
-                cost=lambda p: sim_cpu_seconds(int(p.robots), p.periods, time_step=p.time_step()))
+                engines=SIM_ENGINES, sections=('p1', 'trajectories', 'configurations', 'lifetimes', 'contacts'),
+                cost=lambda p: sim_cpu_seconds(int(p.robots), p.periods, p.engine, p.time_step()))
 def dense_trial(p: DenseParams, seed: int) -> DenseResult:
     """P1/P2/P3: N robots densely packed, in phase (or jittered), for ``periods`` periods; its gliders."""
     config = p.config()
@@ -41,7 +42,8 @@ def dense_trial(p: DenseParams, seed: int) -> DenseResult:
     scene = dense_scene(config.robot, gait, n=int(p.robots), seed=seed, phase_jitter=float(p.phase_jitter))
     watch = ContactPeriods(gait.period) if p.contacts else None
     rec = run_trial(config, scene, float(p.periods), sample_every=int(p.sample_every), record_contacts=False,
-                    controllers=None if watch is None else (lambda physics, gaits: [watch]))
+                    controllers=None if watch is None else (lambda physics, gaits: [watch]),
+                    engine=p.engine_factory())
     result = analyse_recording(config, rec, gait.period, p)
     if watch is not None:
         add_contact_fractions(result['gliders'], watch.periods)

@@ -1,30 +1,29 @@
 """The ``pair`` kind (P4 basin scan, P5 alpha_max sweep): two robots from pair coordinates; binding at the end,
-travel and the pair's gliders. ``pair_mujoco`` is the same trial stepped by MuJoCo (a cross-engine check)."""
+travel and the pair's gliders, in Bullet or (a spec's ``engine: mujoco``) MuJoCo. ``pair_mujoco`` is the same
+trial with MuJoCo as its default engine, kept under its own name so that its stored trials keep their keys."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field, fields
-from typing import Any, ClassVar
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from smarticle_sim.batch import run_trial
 from smarticle_sim.chrono_reference import trailing_true
-from smarticle_sim.errors import SceneError, SimError
-from smarticle_sim.mujoco_engine import MujocoSettings, run_mujoco
+from smarticle_sim.errors import SceneError
+from smarticle_sim.mujoco_engine import run_mujoco
 from smarticle_sim.runner import ContactPeriods
 from smarticle_sim.scenes import pair_scene
 
 from ..cost_model import sim_cpu_seconds
-from ..kind import KINDS
-from ..params import GliderParams, SimParams
+from ..kind import KINDS, OMIT_DEFAULT
+from ..params import SIM_ENGINES, GliderParams
 from ..results import InadmissiblePairResult, PairResult
 from ..trials import analyse_recording, pair_start
 
 PAIR_SECTIONS: tuple[str, ...] = ('basin', 'alpha_sweep', 'step_convergence', 'pair_paths')
-#: MujocoSettings field names (``params: {mujoco: {...}}`` or grid keys ``mujoco.X``).
-MUJOCO_FIELDS: frozenset[str] = frozenset(f.name for f in fields(MujocoSettings))
 
 
 @dataclass(frozen=True)
@@ -43,58 +42,30 @@ class PairParams(GliderParams):
     alpha2_delta_deg: float = 0.0             # robot 2's amplitude minus robot 1's
     hold_first: bool = False                  # robot 1's body held in place, its arms following the gait
 
-
-@dataclass(frozen=True)
-class MujocoParams(SimParams):
-    """A kind's parameters in MuJoCo: ``mujoco`` sets ``MujocoSettings`` fields; no robot can be held."""
-
-    GROUPS: ClassVar[Mapping[str, frozenset[str]]] = {**SimParams.GROUPS, 'mujoco': MUJOCO_FIELDS}
-
-    mujoco: Mapping[str, Any] = field(default_factory=dict)
-
-    def time_step(self) -> float | None:
-        """MuJoCo's time step the spec sets (None: the shipped one)."""
-        return dict(self.mujoco or {}).get('time_step')
-
     def check(self) -> None:
-        """A valid config, gait and MujocoSettings; no held robot (MuJoCo has none)."""
+        """A valid engine, config and gait; no held robot in MuJoCo (it has none)."""
         super().check()
-        if getattr(self, 'hold_first', False):
-            raise ValueError('hold_first: the MuJoCo pair kind has no held robot; use the pair kind (Bullet) or '
-                             'pair_chrono')
-        try:
-            MujocoSettings(**dict(self.mujoco or {}))
-        except SimError as exc:
-            raise ValueError(str(exc)) from None
+        if self.hold_first and self.engine == 'mujoco':
+            raise ValueError('hold_first: MuJoCo has no held robot; run it in Bullet or with kind pair_chrono')
 
 
 @dataclass(frozen=True)
-class PairMujocoParams(PairParams, MujocoParams):
-    """``PairParams`` stepped by MuJoCo."""
+class PairMujocoParams(PairParams):
+    """``PairParams`` with MuJoCo as the default engine (``mujoco`` stored even when empty, as it always was)."""
+
+    engine: str = field(default='mujoco', metadata=OMIT_DEFAULT)
+    mujoco: Mapping[str, Any] = field(default_factory=dict)
 
 
 @KINDS.register('pair', PairParams, 'two robots from pair coordinates (P4 basin scan, P5 alpha_max sweep)',
-                result=PairResult, inadmissible=InadmissiblePairResult, sections=PAIR_SECTIONS,
-                cost=lambda p: sim_cpu_seconds(2, p.periods, time_step=p.time_step()))
+                result=PairResult, inadmissible=InadmissiblePairResult, engines=SIM_ENGINES, sections=PAIR_SECTIONS,
+                cost=lambda p: sim_cpu_seconds(2, p.periods, p.engine, p.time_step()))
 def pair_trial(p: PairParams, seed: int) -> PairResult | InadmissiblePairResult:
     """P4/P5: two robots from pair coordinates; binding at the end, travel, and the pair's gliders.
-    ``hold_first``: robot 1's body held in place, its arms still following the gait (P4 read literally)."""
-    return _pair(p, seed, None)
+    ``hold_first``: robot 1's body held in place, its arms still following the gait (P4 read literally; Bullet).
 
-
-@KINDS.register('pair_mujoco', PairMujocoParams,
-                'the pair kind stepped by MuJoCo (cross-engine check; smarticle_sim.mujoco_engine)',
-                result=PairResult, inadmissible=InadmissiblePairResult, engines=('mujoco',), sections=PAIR_SECTIONS,
-                cost=lambda p: sim_cpu_seconds(2, p.periods, 'mujoco', p.time_step()))
-def pair_mujoco_trial(p: PairMujocoParams, seed: int) -> PairResult | InadmissiblePairResult:
-    """The pair kind's trial stepped by MuJoCo instead of Bullet (``smarticle_sim.mujoco_engine``): the same
-    robots, start and gait; soft contacts with an isotropic friction cone. ``mujoco`` sets ``MujocoSettings``
-    fields. A period counts as colliding if the robots touched at any servo update (1/960 s) in it."""
-    return _pair(p, seed, MujocoSettings(**dict(p.mujoco or {})))
-
-
-def _pair(p: PairParams, seed: int, mujoco: MujocoSettings | None) -> PairResult | InadmissiblePairResult:
-    """The pair kind in Bullet (``mujoco`` None) or MuJoCo."""
+    In MuJoCo (soft contacts, an isotropic friction cone; ``mujoco`` sets ``MujocoSettings`` fields) a period
+    counts as colliding if the robots touched at any servo update in it; in Bullet, at any physics step."""
     config = p.config()
     gait = p.gait(config)
     r, theta, phi = pair_start(p.as_dict(), seed)
@@ -107,6 +78,7 @@ def _pair(p: PairParams, seed: int, mujoco: MujocoSettings | None) -> PairResult
     except SceneError as exc:
         return InadmissiblePairResult(**start, admissible=False, why=str(exc), trouble='', gliders=[])
     per = max(1, round(gait.period / (config.physics.control_tick * int(p.sample_every))))
+    mujoco = p.mujoco_settings()
     if mujoco is not None:
         rec = run_mujoco(config, scene, float(p.periods), int(p.sample_every), mujoco)
         touched = {q for q in range((len(rec.time) - 1) // per)
@@ -116,6 +88,7 @@ def _pair(p: PairParams, seed: int, mujoco: MujocoSettings | None) -> PairResult
         rec = run_trial(config, scene, float(p.periods), sample_every=int(p.sample_every), record_contacts=True,
                         controllers=lambda physics, gaits: [watch])
         touched = watch.periods.get((0, 1), set())
+
     out = analyse_recording(config, rec, gait.period, p)
     bl = config.robot.body_length
     touching = rec.contacts[:, 0, 1]
@@ -134,3 +107,12 @@ def _pair(p: PairParams, seed: int, mujoco: MujocoSettings | None) -> PairResult
                late_w=float(np.linalg.norm(com[-1] - com[len(com) // 2])) if len(com) else 0.0,
                r_end_bl=float(r_all[-1]), phi_end_deg=math.degrees(phi_end))
     return PairResult(**out)
+
+
+@KINDS.register('pair_mujoco', PairMujocoParams,
+                'the pair kind in MuJoCo (the pair kind with engine mujoco under its own name: its stored trials\' '
+                'keys)', result=PairResult, inadmissible=InadmissiblePairResult, engines=('mujoco',),
+                sections=PAIR_SECTIONS, cost=lambda p: sim_cpu_seconds(2, p.periods, p.engine, p.time_step()))
+def pair_mujoco_trial(p: PairMujocoParams, seed: int) -> PairResult | InadmissiblePairResult:
+    """``pair_trial`` in MuJoCo."""
+    return pair_trial(p, seed)
