@@ -112,7 +112,7 @@ def _init_and_host(actions: Sequence[Any], args: list[str] | None,
 
     from smarticle_driver.errors import DriverError
 
-    from .local_delivery import connect, hosted_topics
+    from .local_delivery import connect, hosted_topics, share_clock
 
     rclpy.init(args=args)
     nodes: list[Any] = []
@@ -127,6 +127,7 @@ def _init_and_host(actions: Sequence[Any], args: list[str] | None,
         for node in nodes:
             executor.add_node(node)
         runners = [node for node in nodes if callable(getattr(node, 'run', None))]
+        share_clock(nodes)   # one /clock subscription sets every hosted sim-time clock
         delivery = connect(nodes)
         rclpy.logging.get_logger(NAME).info(f'hosting {len(nodes)} nodes on one executor: '
                                             + ', '.join(n.get_fully_qualified_name() for n in nodes)

@@ -126,6 +126,32 @@ def connect(nodes: Iterable[Any]) -> LocalDelivery:
     return delivery
 
 
+def share_clock(nodes: Iterable[Any]) -> int:
+    """Let the hosted nodes on ``use_sim_time`` share one ``/clock`` subscription; return the nodes joined.
+
+    Every rclpy node on sim time has a time source with its own ``/clock`` subscription whose callback sets
+    the node's clock: in one process each ``/clock`` message would be taken and converted once per node. Here
+    the first such node's time source keeps its subscription and sets every other node's clock too (one
+    callback, the same time on every clock at once); the others' subscriptions are removed. The hosted nodes'
+    ``use_sim_time`` is then theirs at start-up: turning it off at run time on the first one stops every shared
+    clock. Call it before ``connect``, which then finds one hosted time-source ``/clock`` subscriber.
+    """
+    shared = None
+    joined = 0
+    for node in nodes:
+        source = getattr(node, '_time_source', None)   # rclpy's TimeSource of the node (no public accessor)
+        if source is None or not source.ros_time_is_active or source._clock_sub is None:
+            continue
+        if shared is None:
+            shared = source
+            continue
+        node.destroy_subscription(source._clock_sub)
+        source._clock_sub = None
+        shared.attach_clock(node.get_clock())
+        joined += 1
+    return joined
+
+
 def hosted_topics(delivery: LocalDelivery) -> str:
     """One line: the topics delivered in-process and their hosted subscribers."""
     if not delivery.topics:

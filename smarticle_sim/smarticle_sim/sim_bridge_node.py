@@ -216,21 +216,22 @@ class SimBridgeNode(Node):
         self.clock_pub.publish(clock)
         self.published[0] += 1
         physics = self.core.physics
-        state = physics.state()
-        poses = self.core.poses()
+        poses = self.core.poses()   # the bases alone: arms and velocities only for their listeners below
         wall = time.monotonic()
         if wall >= self.listeners_due:   # nobody listens: no message (a new subscriber gets one from the next look)
             self.listeners_due = wall + LISTENER_LOOK
             self.joint_listened = [k for k, pub in enumerate(self.joint_pubs) if pub.get_subscription_count()]
             self.pose_listened = [k for k, pub in enumerate(self.pose_pubs) if pub.get_subscription_count()]
-        for k in self.joint_listened:
-            pub = self.joint_pubs[k]
-            msg = self.JointState()
-            msg.header.stamp = now
-            msg.name = list(topics.JOINT_NAMES)
-            msg.position = state.arm_angles[k].tolist()
-            msg.velocity = state.arm_velocities[k].tolist()
-            pub.publish(msg)
+        if self.joint_listened:
+            state = physics.state()
+            for k in self.joint_listened:
+                pub = self.joint_pubs[k]
+                msg = self.JointState()
+                msg.header.stamp = now
+                msg.name = list(topics.JOINT_NAMES)
+                msg.position = state.arm_angles[k].tolist()
+                msg.velocity = state.arm_velocities[k].tolist()
+                pub.publish(msg)
         listened = [k for k, pub in enumerate(self.fsr_pubs) if pub.get_subscription_count() > 0]
         forces = self.core.fsr_sample(listened)   # peaks since the last publication; [] stops the tracking
         self.fsr_sent = {}
@@ -242,7 +243,9 @@ class SimBridgeNode(Node):
         array.poses = [pose_message(p) for p in poses]
         self.poses_pub.publish(array)
         self.published[1] += 1
-        self.robot_model.publish(now, poses, state.arm_angles)
+        tf_pub = self.robot_model.tf_pub
+        if tf_pub is not None and tf_pub.get_subscription_count() > 0:
+            self.robot_model.publish(now, poses, physics.arm_angles())
         for k in self.pose_listened:
             msg = self.PoseStamped()
             msg.header = array.header
