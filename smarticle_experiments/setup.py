@@ -27,6 +27,7 @@ setup(
     entry_points={
         'console_scripts': [
             'smarticle-experiments = smarticle_experiments.cli:main',
+            'smarticle-calibrate = smarticle_experiments.calibrate_cli:main',
         ],
     },
 )

@@ -7,12 +7,18 @@ The names are the same everywhere: ``physics`` overrides ``PhysicsConfig`` field
 (``diagnostics.Diagnostics``) and ``engine`` names the engine (``bullet``, ``mujoco`` or ``chrono``), which
 refuses the diagnostics and noise it does not build. A name that is no field raises ConfigError naming it and
 the known ones; a bad value raises the field's own ConfigError.
+
+``preset`` is a robot preset's name or the path of a preset file (YAML, written by ``smarticle-calibrate``):
+``preset:`` a base preset's name, ``physics:`` and ``robot:`` overrides of the same names, and any other
+top-level mapping (``calibration:``, the file's provenance) ignored. The overrides given to ``build_config``
+apply on top of the file's.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import fields, replace
+from pathlib import Path
 from typing import Any
 
 from smarticle_common.errors import RobotSpecError
@@ -65,12 +71,55 @@ def noise_config(noise: NoiseConfig | Mapping[str, Any] | str | None) -> NoiseCo
     return replace(NoiseConfig.none(), **noise)
 
 
+#: The keys of a preset file that set something (others, such as ``calibration:``, are its provenance).
+PRESET_FILE_KEYS: tuple[str, ...] = ('preset', 'physics', 'robot')
+
+
+def is_preset_file(preset: str | Path) -> bool:
+    """True if ``preset`` names a preset file (a path ending in .yaml or .yml), not a preset name."""
+    return Path(str(preset)).suffix.lower() in ('.yaml', '.yml')
+
+
+def read_preset_file(path: str | Path) -> tuple[str, dict[str, Any], dict[str, Any]]:
+    """(base preset name, physics overrides, robot overrides) of a preset file; ConfigError on bad input."""
+    import yaml
+
+    path = Path(path)
+    try:
+        data = yaml.safe_load(path.read_text(encoding='utf-8'))
+    except OSError as err:
+        raise ConfigError(f'preset file {path}: cannot be read ({err.strerror or err})') from None
+    except yaml.YAMLError as err:
+        raise ConfigError(f'preset file {path}: not YAML ({str(err).splitlines()[0]})') from None
+    if not isinstance(data, Mapping):
+        raise ConfigError(f'preset file {path}: must be a mapping with preset, physics and robot keys')
+    base = data.get('preset', 'small')
+    if not isinstance(base, str) or is_preset_file(base):
+        raise ConfigError(f'preset file {path}: preset must be a robot preset name, got {base!r}')
+    groups = []
+    for key in ('physics', 'robot'):
+        group = data.get(key) or {}
+        if not isinstance(group, Mapping):
+            raise ConfigError(f'preset file {path}: {key} must be a mapping of field: value')
+        try:
+            check_names(key, group)
+        except ConfigError as err:
+            raise ConfigError(f'preset file {path}: {err}') from None
+        groups.append(dict(group))
+    return base, groups[0], groups[1]
+
+
 def build_config(preset: str = 'small', physics: Mapping[str, Any] | None = None,
                  robot: Mapping[str, Any] | None = None,
                  noise: NoiseConfig | Mapping[str, Any] | str | None = None,
                  diagnostics: Mapping[str, Any] | None = None, engine: str = 'bullet') -> SimConfig:
     """The SimConfig of robot ``preset`` with PhysicsConfig / RobotSpec overrides, the noise of ``noise``
-    (``noise_config``) and ``diagnostics`` (Diagnostics fields), checked for ``engine``."""
+    (``noise_config``) and ``diagnostics`` (Diagnostics fields), checked for ``engine``. ``preset`` may be
+    a preset file (``read_preset_file``): its overrides apply first, ``physics`` and ``robot`` on top."""
+    if is_preset_file(preset):
+        preset, file_physics, file_robot = read_preset_file(preset)
+        physics = {**file_physics, **dict(physics or {})}
+        robot = {**file_robot, **dict(robot or {})}
     check_names('physics', physics)
     check_names('robot', robot)
     check_names('diagnostics', diagnostics)

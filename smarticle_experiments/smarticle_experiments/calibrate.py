@@ -1,0 +1,603 @@
+"""Calibration from recorded bags: rebuild each run's scene, simulate it, compare, fit, write a preset file.
+
+A bag of a run (the robots' boards and the overhead tracker, or the sim bridge with ``record:=true
+record_robots:=true``) holds what a comparison needs: ``/smarticles/poses`` (the tracked poses),
+``/smarticles/start`` (the gaits' shared start) and each robot's ``joint_commands`` or ``joint_states`` (the
+gait amplitude and each robot's clock, ``smarticle_tracking.clocks``) and ``fsr``. ``load_run`` reads it into a
+``BagRun`` (its poses once per gait period from the start). The run is cut into segments of one burn-in period
+and ``SEGMENT_PERIODS`` compared periods, one every ``SEGMENT_PERIODS`` periods; ``simulate`` restarts the batch
+core (no ROS) at each segment from the bag's poses at its start (``scene_of``: the bag's gait amplitude and
+period, the phase each robot's clock has reached, its measured clock rate), so a chaotic run's divergence stays
+within one segment. The observables of a segment, over its compared periods:
+
+* ``speed``: each robot's travel per period (BL / period);
+* ``turn``: each robot's heading change per period (rad / period);
+* ``r``, ``phi``: each pair's centre distance (BL) and relative heading (rad, wrapped) at the segment's end
+  (runs of two or three robots);
+* ``fsr``: each robot's mean per-period peak FSR force (N), where the bag recorded FSR.
+
+The gap of an observable is the root mean square of (sim - bag) over its segments and components. The
+distance a fit minimises is stated once:
+
+    D(p) = sum over observables and terms of soft_l1((sim - bag) / SCALES[observable])
+    soft_l1(z) = 2 (sqrt(1 + z^2) - 1)
+
+(z^2 near zero, 2 |z| far out, so one segment where a robot flips does not outweigh the rest), each gap
+normalised by a fixed scale (``SCALES``, about what a tracker resolves) so no observable outweighs the others
+by its unit. The fit is a coarse grid (``scipy.optimize.brute``) then ``scipy.optimize.minimize`` (Powell,
+bounded, on parameters scaled to [0, 1]); the sim is deterministic (no noise: common random numbers by
+construction), so ``D`` is a function of the parameters alone. Each fitted value's 95 % interval is a
+profile: the values of that parameter (the others held at their fit) whose ``D`` stays within
+``D_min * (1 + F / nu)`` where ``nu`` is the number of terms less the parameters and ``F`` the 95 % quantile of
+chi-square with one degree of freedom (the residual scale estimated from the fit's own residuals, as in
+nonlinear least squares), bracketed by the nearest values that exceed it (``fit``). Trials run on Dask
+(``smarticle_experiments.engine.dask_client``) when asked.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+from scipy import optimize, stats
+
+from smarticle_common.facts import GAIT_PERIOD, PRESETS, RobotSpec
+from smarticle_common.gait import GaitConfig
+from smarticle_sim.config_builder import build_config, is_preset_file, read_preset_file
+from smarticle_sim.errors import ConfigError
+from smarticle_sim.settings import PhysicsConfig, SimConfig
+
+from .errors import ExperimentError
+
+FloatArray = npt.NDArray[np.float64]
+
+#: Gait periods per segment of a run (the unit of the observables and of the profile's terms).
+SEGMENT_PERIODS = 2
+#: The scale of each observable's gap in the distance (its unit: BL / period, rad / period, BL, rad, N).
+SCALES: dict[str, float] = {'speed': 0.002, 'turn': 0.01, 'r': 0.05, 'phi': 0.1, 'fsr': 0.05}
+#: Units of the observables, for the report.
+UNITS: dict[str, str] = {'speed': 'BL/period', 'turn': 'rad/period', 'r': 'BL', 'phi': 'rad', 'fsr': 'N'}
+
+
+class CalibrationError(ExperimentError, ValueError):
+    """Bad input to the calibration: a missing bag, a bag without poses, an unknown parameter."""
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """A parameter the fit can move: its group (physics or robot), field and bounds."""
+
+    name: str
+    group: str
+    lo: float
+    hi: float
+
+
+def _float_fields(cls: type, exclude: set[str]) -> dict[str, float]:
+    defaults = cls() if cls is PhysicsConfig else PRESETS['small']
+    return {f.name: float(getattr(defaults, f.name)) for f in fields(cls)
+            if f.name not in exclude and isinstance(getattr(defaults, f.name), float)
+            and not isinstance(getattr(defaults, f.name), bool)}
+
+
+#: Physics fields that shape the run's numerics or its trouble checks, not the robots: not fitted.
+_NOT_FITTED = {'time_step', 'control_tick', 'plate_size', 'plate_thickness', 'max_tilt', 'max_speed',
+               'max_penetration', 'fsr_window', 'contact_breaking_threshold', 'gravity', 'position_gain',
+               'ccd_swept_sphere_radius', 'restitution_velocity_threshold'}
+#: Default bounds of the named parameters (others: half to twice their default).
+_BOUNDS: dict[str, tuple[float, float]] = {
+    'friction_body_plate': (0.05, 1.0), 'friction_robot_robot': (0.05, 1.0), 'restitution': (0.0, 1.0),
+    'servo_bandwidth': (20.0, 1000.0),
+}
+
+
+def fittable() -> dict[str, Parameter]:
+    """Every parameter name ``--fit`` accepts: float PhysicsConfig fields (friction coefficients, restitution,
+    servo bandwidth, ...) and RobotSpec fields (servo speed, masses, ...), with their default bounds."""
+    out: dict[str, Parameter] = {}
+    for group, cls, exclude in (('physics', PhysicsConfig, _NOT_FITTED), ('robot', RobotSpec, set())):
+        for name, value in _float_fields(cls, exclude).items():
+            lo, hi = _BOUNDS.get(name, (0.5 * value, 2.0 * value) if value > 0 else (0.0, 1.0))
+            out[name] = Parameter(name, group, lo, hi)
+    for name in ('restitution_body_plate', 'servo_bandwidth', 'friction_arm_arm'):  # optional floats
+        lo, hi = _BOUNDS.get(name, (0.05, 1.0))
+        out.setdefault(name, Parameter(name, 'physics', lo, hi))
+    return out
+
+
+def parse_fit(text: str) -> list[Parameter]:
+    """``NAME[=LO:HI][,NAME...]`` into parameters; CalibrationError naming an unknown name or a bad bound."""
+    known = fittable()
+    out = []
+    for item in (s.strip() for s in text.split(',')):
+        if not item:
+            continue
+        name, _, bounds = item.partition('=')
+        if name not in known:
+            raise CalibrationError(f'--fit: {name!r} is no parameter to fit; known: {", ".join(sorted(known))}')
+        param = known[name]
+        if bounds:
+            try:
+                lo, hi = (float(v) for v in bounds.split(':'))
+            except ValueError:
+                raise CalibrationError(f'--fit: {item!r}: bounds are LO:HI, two numbers') from None
+            if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+                raise CalibrationError(f'--fit: {item!r}: bounds need LO < HI, both finite')
+            param = Parameter(name, param.group, lo, hi)
+        out.append(param)
+    if not out:
+        raise CalibrationError('--fit names no parameter')
+    return out
+
+
+@dataclass(frozen=True)
+class BagRun:
+    """One recorded run: stroboscopic poses (one per gait period from the start) and what the scene needs."""
+
+    name: str
+    start: float                      # the gaits' start (s, bag stamps)
+    period: float                     # the nominal gait period (s)
+    alpha_max: float                  # rad
+    first: FloatArray                 # (n, 3) the first tracked poses at or after the start
+    strobe: FloatArray                # (periods + 1, n, 3) poses at start + k * period (NaN if unseen)
+    phases: tuple[float, ...]
+    rates: tuple[float, ...]
+    fsr_peaks: FloatArray | None      # (periods, n) per-period peak FSR force, or None
+    notes: tuple[str, ...] = ()
+
+    @property
+    def robots(self) -> int:
+        return int(self.first.shape[0])
+
+    @property
+    def periods(self) -> int:
+        return int(self.strobe.shape[0]) - 1
+
+
+def _strobe(times: FloatArray, xyh: FloatArray, at: npt.NDArray[Any]) -> FloatArray:
+    """Poses at times ``at`` (nearest sample within half a sampling interval; NaN otherwise), headings unwrapped."""
+    if len(times) < 2:
+        raise CalibrationError('a run needs at least two pose samples')
+    step = float(np.median(np.diff(times)))
+    idx = np.clip(np.searchsorted(times, at), 1, len(times) - 1)
+    idx = np.where(np.abs(times[idx - 1] - at) <= np.abs(times[idx] - at), idx - 1, idx)
+    out = xyh[idx].copy()
+    out[np.abs(times[idx] - at) > 0.5 * step + 1e-9] = np.nan
+    out[..., 2] = _unwrap(out[..., 2])
+    return out
+
+
+def _unwrap(h: FloatArray) -> FloatArray:
+    out = h.copy()
+    for k in range(h.shape[1]):
+        ok = np.isfinite(h[:, k])
+        out[ok, k] = np.unwrap(h[ok, k])
+    return out
+
+
+def load_run(path: str | Path, period: float = GAIT_PERIOD, alpha_max_deg: float | None = None,
+             duration: float | None = None) -> BagRun:
+    """Read a bag into a BagRun; CalibrationError (one line) if it is missing or holds no poses."""
+    from smarticle_bags import arrays
+    from smarticle_bags.errors import BagError
+    from smarticle_bags.reader import BagReader
+    from smarticle_common import topics as contract
+    from smarticle_tracking.clocks import ClockError, estimate_clock
+
+    notes: list[str] = []
+    try:
+        reader = BagReader(path)
+        poses_topic = contract.topic('poses')
+        if poses_topic not in reader.topics:
+            raise CalibrationError(f'{path}: holds no {poses_topic}: nothing to compare')
+        poses = arrays.read_poses(reader)
+        start_topic = contract.topic('start')
+        starts = ([m.stamp.sec + 1e-9 * m.stamp.nanosec for _, m in reader.decoded([start_topic])]
+                  if start_topic in reader.topics else [])
+        commands = arrays.read_robot_topic(reader, 'joint_commands')
+        states = arrays.read_robot_topic(reader, 'joint_states')
+        fsr = arrays.read_fsr(reader)
+    except BagError as err:
+        raise CalibrationError(str(err)) from None
+    times, xyh = poses.stamp, poses.xyh
+    if len(times) < 2 or xyh.shape[1] == 0:
+        raise CalibrationError(f'{path}: {poses_topic} holds fewer than two poses')
+    start = starts[-1] if starts else float(times[0])
+    if not starts:
+        notes.append('no /smarticles/start: the gaits start at the first pose')
+    seen = np.all(np.isfinite(xyh[:, :, :2]), axis=(1, 2)) & (times >= start - 1e-6)
+    if not np.any(seen):
+        raise CalibrationError(f'{path}: no pose after the gait start sees every robot')
+    first = xyh[int(np.argmax(seen))]
+    end = float(times[-1]) if duration is None else min(float(times[-1]), start + duration)
+    n_periods = int(math.floor((end - start) / period + 1e-9))
+    if n_periods < SEGMENT_PERIODS + 1:
+        raise CalibrationError(f'{path}: {end - start:.3g} s after the gait start is shorter than '
+                               f'{SEGMENT_PERIODS + 1} gait periods of {period:g} s')
+    strobe = _strobe(times, xyh, start + period * np.arange(n_periods + 1))
+    n = xyh.shape[1]
+    # gait amplitude: the commands' (or states') largest arm angle, else the option
+    amplitude = alpha_max_deg
+    joints = commands or states
+    if amplitude is None and joints:
+        values = [np.nanmax(np.abs(s.position[:, [s.names.index('arm1'), s.names.index('arm2')]]))
+                  for s in joints.values() if {'arm1', 'arm2'} <= set(s.names) and len(s.stamp)]
+        if values:
+            amplitude = round(math.degrees(float(np.nanmax(values))))
+    if amplitude is None:
+        amplitude = 90.0
+        notes.append('no joint topics: alpha_max 90 deg')
+    phases, rates = [0.0] * n, [1.0] * n
+    for k in range(n):
+        source = commands if k in commands else states if k in states else None
+        if source is None:
+            notes.append(f'robot {k}: no joint topics: clock rate 1, phase 0')
+            continue
+        s = source[k]
+        try:
+            arms = [s.names.index('arm1'), s.names.index('arm2')]
+            est = estimate_clock(s.stamp, s.position[:, arms], kind='commands' if source is commands else 'states',
+                                 period=period, start=start, velocity=s.velocity[:, arms], robot=k)
+        except (ClockError, ValueError) as err:
+            notes.append(f'robot {k}: clock not estimated ({err}): rate 1, phase 0')
+            continue
+        rates[k], phases[k] = float(est.rate), float(est.phase) % 1.0
+    fsr_peaks = None
+    if fsr and all(k in fsr for k in range(n)):
+        fsr_peaks = np.full((n_periods, n), np.nan)
+        for k in range(n):
+            s = fsr[k]
+            force = np.nanmax(np.nan_to_num(s.effort, nan=0.0), axis=1) if s.effort.size else np.zeros(0)
+            for j in range(n_periods):
+                inside = (s.stamp >= start + j * period) & (s.stamp < start + (j + 1) * period)
+                if np.any(inside):
+                    fsr_peaks[j, k] = float(np.max(force[inside]))
+    if not np.any(np.all(np.isfinite(strobe[:n_periods - SEGMENT_PERIODS:SEGMENT_PERIODS, :, :2]), axis=(1, 2))):
+        raise CalibrationError(f'{path}: no segment start (every {SEGMENT_PERIODS} periods) sees every robot')
+    return BagRun(Path(path).name, start, period, math.radians(amplitude), first, strobe, tuple(phases),
+                  tuple(rates), fsr_peaks, tuple(notes))
+
+
+def segment_starts(run: BagRun) -> list[int]:
+    """The periods at which the run's segments start: every ``SEGMENT_PERIODS`` periods, each segment one burn-in
+    period and ``SEGMENT_PERIODS`` compared periods long, where the bag sees every robot at the start."""
+    out = []
+    for s in range(0, run.periods - SEGMENT_PERIODS, SEGMENT_PERIODS):
+        if np.all(np.isfinite(run.strobe[s, :, :3])):
+            out.append(s)
+    return out
+
+
+def scene_of(run: BagRun, config: SimConfig, at: int = 0) -> Any:
+    """The scene of the run's segment starting at period ``at``: each robot at its tracked pose then (centred on
+    the plate), with the bag's gait amplitude and period and the phase its clock has reached; footprints may
+    overlap by 2 mm (the tracker's error)."""
+    from smarticle_sim.scenes import RobotPlacement, Scene, start_angles
+
+    poses = run.strobe[at]
+    centre = np.nanmean(poses[:, :2], axis=0)
+    robots = []
+    for k in range(run.robots):
+        phase = (run.phases[k] + (run.rates[k] - 1.0) * at) % 1.0
+        gait = GaitConfig(run.alpha_max, run.period, config.robot.servo_speed, phase)
+        a1, a2 = start_angles(gait)
+        x, y, h = (float(v) for v in poses[k])
+        robots.append(RobotPlacement(x - float(centre[0]), y - float(centre[1]), h, a1, a2, gait))
+    return Scene(tuple(robots), name=f'bag:{run.name}@{at}', seed=0, overlap_tolerance=0.002)
+
+
+def _segment_observables(a: FloatArray, b: FloatArray, fsr: FloatArray | None,
+                         body_length: float) -> dict[str, FloatArray]:
+    """Observables (segments, components) from poses ``a`` and ``b`` (segments, n, 3) ``SEGMENT_PERIODS`` apart
+    and each segment's mean per-period peak FSR force (segments, n) or None."""
+    seg = SEGMENT_PERIODS
+    out = {'speed': np.hypot(b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]) / body_length / seg,
+           'turn': (b[..., 2] - a[..., 2]) / seg}
+    n = a.shape[1]
+    pairs = [(i, j) for i in range(n) for j in range(i + 1, n)]
+    if pairs and n <= 3:
+        out['r'] = np.stack([np.hypot(*(b[:, j, :2] - b[:, i, :2]).T) for i, j in pairs], axis=1) / body_length
+        out['phi'] = np.stack([b[:, j, 2] - b[:, i, 2] for i, j in pairs], axis=1)
+    if fsr is not None:
+        out['fsr'] = fsr
+    return out
+
+
+def bag_observables(run: BagRun, body_length: float) -> dict[str, FloatArray]:
+    """The bag's observables over each segment's compared periods (``segment_starts``)."""
+    starts = np.array(segment_starts(run), dtype=int)
+    seg = SEGMENT_PERIODS
+    fsr = None
+    if run.fsr_peaks is not None:
+        fsr = np.stack([run.fsr_peaks[s + 1:s + 1 + seg].mean(axis=0) for s in starts]) if len(starts) else None
+    return _segment_observables(run.strobe[starts + 1], run.strobe[starts + 1 + seg], fsr, body_length)
+
+
+def simulate(run: BagRun, config: SimConfig, engine: str = 'bullet') -> dict[str, FloatArray]:
+    """The sim's observables of the run: each segment simulated from the bag's poses at its start (one
+    burn-in period, then the ``SEGMENT_PERIODS`` compared), with each robot's measured clock rate. Restarting
+    from the bag every segment keeps a chaotic run's divergence to one segment, so the distance is smooth."""
+    from smarticle_sim.batch import run_trial
+    from smarticle_sim.engines import engine_factory
+
+    seg = SEGMENT_PERIODS
+    rates = run.rates
+    want_fsr = run.fsr_peaks is not None
+
+    def clocks(_physics: Any, gaits: Any) -> list[Any]:
+        gaits.clock_rates = tuple(float(r) for r in rates)   # each robot's measured gait clock
+        return []
+
+    firsts, lasts, peaks = [], [], []
+    for s in segment_starts(run):
+        rec = run_trial(config, scene_of(run, config, s), float(seg + 1), record_fsr=want_fsr, controllers=clocks,
+                        engine=engine_factory(engine))
+        times = np.asarray(rec.time)
+        strobe = _strobe(times, np.asarray(rec.poses), run.period * np.arange(seg + 2))
+        firsts.append(strobe[1])
+        lasts.append(strobe[1 + seg])
+        if want_fsr:
+            force = np.asarray(rec.fsr).max(axis=2)
+            per = [force[(times >= j * run.period) & (times < (j + 1) * run.period)].max(axis=0)
+                   for j in range(1, seg + 1)]
+            peaks.append(np.mean(per, axis=0))
+    n = run.robots
+    a = np.array(firsts).reshape(-1, n, 3)
+    b = np.array(lasts).reshape(-1, n, 3)
+    return _segment_observables(a, b, np.array(peaks).reshape(-1, n) if want_fsr else None, config.robot.body_length)
+
+
+def residuals(sim: Mapping[str, FloatArray], bag: Mapping[str, FloatArray]) -> dict[str, FloatArray]:
+    """sim - bag per observable, over the segments both have (phi wrapped to [-pi, pi))."""
+    out = {}
+    for name in bag:
+        if name not in sim:
+            continue
+        m = min(len(sim[name]), len(bag[name]))
+        d = sim[name][:m] - bag[name][:m]
+        if name == 'phi':
+            d = (d + math.pi) % (2 * math.pi) - math.pi
+        out[name] = d[np.isfinite(d)]
+    return out
+
+
+def soft_l1(z: FloatArray) -> FloatArray:
+    """2 (sqrt(1 + z^2) - 1): z^2 for small z, 2 |z| for large (scipy's least_squares soft_l1 loss)."""
+    return 2.0 * (np.sqrt(1.0 + z ** 2) - 1.0)
+
+
+def distance(res: Mapping[str, FloatArray]) -> float:
+    """The stated distance: the sum over observables and terms of soft_l1(residual / SCALES[observable])."""
+    return float(sum(np.sum(soft_l1(r / SCALES[name])) for name, r in res.items()))
+
+
+def gaps(res: Mapping[str, FloatArray]) -> dict[str, float]:
+    """Root mean square residual per observable."""
+    return {name: float(np.sqrt(np.mean(r ** 2))) if r.size else math.nan for name, r in res.items()}
+
+
+@dataclass
+class Problem:
+    """The runs, the base config (preset name or file) and the parameters to fit; evaluates the distance."""
+
+    runs: Sequence[BagRun]
+    preset: str
+    params: Sequence[Parameter]
+    engine: str = 'bullet'
+    mapper: Callable[[Callable[[Any], Any], Sequence[Any]], list[Any]] | None = None
+    cache: dict[tuple[float, ...], dict[str, FloatArray]] = field(default_factory=dict)
+
+    def config(self, values: Sequence[float]) -> SimConfig:
+        groups: dict[str, dict[str, float]] = {'physics': {}, 'robot': {}}
+        for p, v in zip(self.params, values, strict=True):
+            groups[p.group][p.name] = float(v)
+        return build_config(self.preset, groups['physics'], groups['robot'], engine=self.engine)
+
+    def residuals(self, values: Sequence[float]) -> dict[str, FloatArray]:
+        key = tuple(round(float(v), 12) for v in values)
+        if key not in self.cache:
+            config = self.config(values)
+            jobs = [(run, config, self.engine) for run in self.runs]
+            outs = (self.mapper or _map)(_simulate_job, jobs)
+            merged: dict[str, list[FloatArray]] = {}
+            for run, sim in zip(self.runs, outs, strict=True):
+                res = residuals(sim, bag_observables(run, config.robot.body_length))
+                for name, r in res.items():
+                    merged.setdefault(name, []).append(r.ravel())
+            self.cache[key] = {name: np.concatenate(rs) for name, rs in merged.items()}
+        return self.cache[key]
+
+    def distance(self, values: Sequence[float]) -> float:
+        return distance(self.residuals(values))
+
+    def defaults(self) -> list[float]:
+        config = build_config(self.preset)
+        return [float(getattr(config.physics if p.group == 'physics' else config.robot, p.name) or p.lo)
+                for p in self.params]
+
+
+def _map(fn: Callable[[Any], Any], items: Sequence[Any]) -> list[Any]:
+    return [fn(item) for item in items]
+
+
+def _simulate_job(job: tuple[BagRun, SimConfig, str]) -> dict[str, FloatArray]:
+    run, config, engine = job
+    return simulate(run, config, engine)
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """Fitted values, their 95 % profile intervals, the distance at the defaults and at the fit, and the gaps."""
+
+    names: tuple[str, ...]
+    values: tuple[float, ...]
+    intervals: tuple[tuple[float, float], ...]
+    distance_default: float
+    distance_fit: float
+    terms: int
+    gaps_default: dict[str, float]
+    gaps_fit: dict[str, float]
+    evaluations: int
+
+
+#: Grid points per parameter of the first, coarse search (by the number of parameters fitted; none beyond).
+GRID_POINTS: dict[int, int] = {1: 21, 2: 7}
+
+
+def fit(problem: Problem, max_evaluations: int = 40) -> FitResult:
+    """Minimise the distance: a coarse grid over the bounds (``scipy.optimize.brute``, ``GRID_POINTS``; the
+    distance of a chaotic run is rough, so a local search alone stalls in the nearest dip), then scipy's
+    Powell (bounded, parameters scaled to [0, 1], at most ``max_evaluations``) from the best of the grid and
+    the defaults. Each fitted value's 95 % interval is a profile over the values the search evaluated with
+    the other parameters at their fit: from the nearest value on each side whose distance exceeds
+    ``D_min * (1 + F / nu)`` (``F`` the 95 % chi-square quantile with one degree of freedom, ``nu`` the terms
+    less the parameters), after refining that bracket by four bisection steps on the sign of the excess (an end is a
+    rejected value, so the interval errs wide)."""
+    lo = np.array([p.lo for p in problem.params])
+    hi = np.array([p.hi for p in problem.params])
+    k = len(lo)
+    x0 = np.clip((np.array(problem.defaults()) - lo) / (hi - lo), 0.0, 1.0)
+
+    def value(u: FloatArray) -> list[float]:
+        return [float(v) for v in lo + np.clip(u, 0.0, 1.0) * (hi - lo)]
+
+    def objective(u: FloatArray) -> float:
+        return problem.distance(value(np.atleast_1d(u)))
+
+    d0 = objective(x0)
+    start, d_start = x0, d0
+    if k in GRID_POINTS:
+        grid = np.atleast_1d(optimize.brute(objective, [(0.0, 1.0)] * k, Ns=GRID_POINTS[k], finish=None))
+        if objective(grid) < d_start:
+            start, d_start = grid, objective(grid)
+    step = 0.5 / GRID_POINTS.get(k, 4)
+    res = optimize.minimize(objective, start, method='Powell', bounds=[(0.0, 1.0)] * k,
+                            options={'xtol': 1e-3, 'ftol': 1e-6, 'maxfev': max_evaluations,
+                                     'direc': np.eye(k) * step})
+    best, d_min = np.clip(np.atleast_1d(res.x), 0.0, 1.0), objective(np.atleast_1d(res.x))
+    if d_start < d_min:
+        best, d_min = start, d_start
+    terms = int(sum(r.size for r in problem.residuals(value(best)).values()))
+    nu = max(1, terms - k)
+    limit = d_min * (1.0 + float(stats.chi2.ppf(0.95, 1)) / nu) + 1e-9
+    intervals = []
+    for i in range(k):
+        def excess(ui: float, i: int = i) -> float:
+            u = best.copy()
+            u[i] = ui
+            return objective(u) - limit
+        ends = []
+        for edge in (0.0, 1.0):
+            # the evaluated values on this side with the others at their fit; the nearest rejected one brackets
+            tried = sorted({float(key[i]) for key in problem.cache
+                            if all(abs(key[j] - value(best)[j]) < 1e-9 for j in range(k) if j != i)})
+            side = [(v - lo[i]) / (hi[i] - lo[i]) for v in tried]
+            side = [u for u in side if (u < best[i]) == (edge < best[i]) and u != best[i]]
+            side.sort(key=lambda u: abs(u - best[i]))
+            outer = next((u for u in side if excess(u) > 0.0), None)
+            if outer is None:
+                outer = edge
+                if excess(edge) <= 0.0:
+                    ends.append(edge)
+                    continue
+            inner = float(best[i])
+            for _ in range(4):                # bisection on the sign of the excess
+                mid = 0.5 * (inner + outer)
+                if excess(mid) > 0.0:
+                    outer = mid
+                else:
+                    inner = mid
+            ends.append(outer)
+        intervals.append(tuple(value(np.where(np.arange(k) == i, e, best))[i] for e in ends))
+    return FitResult(tuple(p.name for p in problem.params), tuple(value(best)),
+                     tuple((a, b) for a, b in intervals), d0, d_min, terms,
+                     gaps(problem.residuals(value(x0))), gaps(problem.residuals(value(best))), len(problem.cache))
+
+
+def write_preset(path: str | Path, preset: str, params: Sequence[Parameter], result: FitResult,
+                 bags: Sequence[str]) -> Path:
+    """Write the calibrated preset file: the base preset, the fitted overrides and the provenance."""
+    import yaml
+
+    base, physics, robot = (read_preset_file(preset) if is_preset_file(preset) else (preset, {}, {}))
+    for p, v in zip(params, result.values, strict=True):
+        (physics if p.group == 'physics' else robot)[p.name] = float(v)
+    data: dict[str, Any] = {
+        'preset': base,
+        'physics': physics,
+        'robot': robot,
+        'calibration': {
+            'bags': list(bags),
+            'distance': 'sum over observables and terms of soft_l1((sim - bag) / scale), '
+                        'soft_l1(z) = 2 (sqrt(1 + z^2) - 1); scales: '
+                        + ', '.join(f'{k} {v:g} {UNITS[k]}' for k, v in SCALES.items()),
+            'distance_default': float(result.distance_default),
+            'distance_fit': float(result.distance_fit),
+            'terms': result.terms,
+            'fitted': {name: {'value': float(v), 'interval_95': [float(e) for e in iv]}
+                       for name, v, iv in zip(result.names, result.values, result.intervals, strict=True)},
+        },
+    }
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(yaml.safe_dump(data, sort_keys=False), encoding='utf-8')
+    try:
+        build_config(str(out))
+    except ConfigError as err:
+        raise CalibrationError(f'the written preset file does not load: {err}') from None
+    return out
+
+
+def format_gaps(title: str, before: Mapping[str, float], after: Mapping[str, float] | None = None) -> str:
+    """A table of the gap per observable (default and, if given, fitted)."""
+    lines = [title, f'{"observable":<10} {"unit":<11} {"default":>10}' + (f' {"fitted":>10}' if after else '')]
+    for name, v in before.items():
+        row = f'{name:<10} {UNITS[name]:<11} {v:>10.4g}'
+        if after is not None:
+            row += f' {after.get(name, math.nan):>10.4g}'
+        lines.append(row)
+    return '\n'.join(lines)
+
+
+def draw_gaps(path: str | Path, before: Mapping[str, float], after: Mapping[str, float] | None = None) -> Path:
+    """A bar chart of each observable's gap normalised by its scale (default, fitted)."""
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+
+    names = list(before)
+    x = np.arange(len(names))
+    fig, ax = plt.subplots(figsize=(6, 3.2))
+    ax.bar(x - 0.2, [before[n] / SCALES[n] for n in names], 0.4, label='default')
+    if after is not None:
+        ax.bar(x + 0.2, [after.get(n, math.nan) / SCALES[n] for n in names], 0.4, label='fitted')
+    ax.set_xticks(x, [f'{n}\n({UNITS[n]})' for n in names])
+    ax.set_ylabel('gap / scale (RMS)')
+    ax.legend()
+    fig.tight_layout()
+    out = Path(path)
+    fig.savefig(out, dpi=100)
+    plt.close(fig)
+    return out
+
+
+def write_pose_bag(time: FloatArray, poses: FloatArray, output: str | Path, source: str) -> Path:
+    """A bag of ``/smarticles/poses`` from sampled poses (``time`` (T,) s, ``poses`` (T, n, 3)): a batch-core
+    run written as the tracker would have seen it (no start topic: the gaits start at the first pose)."""
+    from smarticle_bags.csv_import import SENSOR_QOS, encode_pose_array
+    from smarticle_bags.writer import BagWriter
+    from smarticle_common import topics as contract
+
+    topic = contract.topic('poses')
+    with BagWriter(output, custom_data={'recorded_from': source}) as writer:
+        writer.add_topic(topic, contract.spec_of('poses').type, [SENSOR_QOS])
+        for t, xyh in zip(time, poses, strict=True):
+            ns = int(round(float(t) * 1e9))
+            writer.write(topic, encode_pose_array(ns, np.asarray(xyh, dtype=float)), ns)
+        writer.close()
+    return Path(output)
