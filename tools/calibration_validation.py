@@ -30,7 +30,7 @@ TRUTHS = (0.25, 0.40, 0.55)
 STATED_ERROR = 0.05
 STACK_SECONDS = 20.0
 #: Rule (b): MuJoCo's pair starts (theta, phi in degrees) at r = 1.3 BL, 12 periods each; first half fits.
-MUJOCO_STARTS = ((0.0, 180.0), (30.0, 150.0), (330.0, 200.0), (0.0, 90.0))
+MUJOCO_STARTS = ((0.0, 180.0), (0.0, 160.0), (330.0, 200.0), (0.0, 0.0))
 MUJOCO_PERIODS = 12
 RESAMPLES = 2000
 
