@@ -27,11 +27,9 @@ normalised by a fixed scale (``SCALES``, about what a tracker resolves) so no ob
 by its unit. The fit is a coarse grid (``scipy.optimize.brute``) then ``scipy.optimize.minimize`` (Powell,
 bounded, on parameters scaled to [0, 1]); the sim is deterministic (no noise: common random numbers by
 construction), so ``D`` is a function of the parameters alone. Each fitted value's 95 % interval is a
-profile: the values of that parameter (the others held at their fit) whose ``D`` stays within
-``D_min * (1 + F / nu)`` where ``nu`` is the number of terms less the parameters and ``F`` the 95 % quantile of
-chi-square with one degree of freedom (the residual scale estimated from the fit's own residuals, as in
-nonlinear least squares), bracketed by the nearest values that exceed it (``fit``). Trials run on Dask
-(``smarticle_experiments.engine.dask_client``) when asked.
+bootstrap over the runs' segments: each resample of the segments picks, among the parameter values the
+search evaluated, the one with the least distance over it; the interval holds the middle 95 % of the picks
+(``fit``). Trials run on Dask (``smarticle_experiments.engine.dask_client``) when asked.
 """
 
 from __future__ import annotations
@@ -44,7 +42,7 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-from scipy import optimize, stats
+from scipy import optimize
 
 from smarticle_common.facts import GAIT_PERIOD, PRESETS, RobotSpec
 from smarticle_common.gait import GaitConfig
@@ -352,8 +350,9 @@ def simulate(run: BagRun, config: SimConfig, engine: str = 'bullet') -> dict[str
     return _segment_observables(a, b, np.array(peaks).reshape(-1, n) if want_fsr else None, config.robot.body_length)
 
 
-def residuals(sim: Mapping[str, FloatArray], bag: Mapping[str, FloatArray]) -> dict[str, FloatArray]:
-    """sim - bag per observable, over the segments both have (phi wrapped to [-pi, pi))."""
+def residuals(sim: Mapping[str, FloatArray], bag: Mapping[str, FloatArray], flat: bool = True) -> dict[str, FloatArray]:
+    """sim - bag per observable, over the segments both have (phi wrapped to [-pi, pi)); ``flat``: the finite
+    values in one array, else (segments, components) with NaN where either side is unseen."""
     out = {}
     for name in bag:
         if name not in sim:
@@ -362,7 +361,7 @@ def residuals(sim: Mapping[str, FloatArray], bag: Mapping[str, FloatArray]) -> d
         d = sim[name][:m] - bag[name][:m]
         if name == 'phi':
             d = (d + math.pi) % (2 * math.pi) - math.pi
-        out[name] = d[np.isfinite(d)]
+        out[name] = d[np.isfinite(d)] if flat else d
     return out
 
 
@@ -391,6 +390,8 @@ class Problem:
     engine: str = 'bullet'
     mapper: Callable[[Callable[[Any], Any], Sequence[Any]], list[Any]] | None = None
     cache: dict[tuple[float, ...], dict[str, FloatArray]] = field(default_factory=dict)
+    #: Per parameter values evaluated: each segment's share of the distance (all runs' segments in order).
+    segment_terms: dict[tuple[float, ...], FloatArray] = field(default_factory=dict)
 
     def config(self, values: Sequence[float]) -> SimConfig:
         groups: dict[str, dict[str, float]] = {'physics': {}, 'robot': {}}
@@ -405,11 +406,18 @@ class Problem:
             jobs = [(run, config, self.engine) for run in self.runs]
             outs = (self.mapper or _map)(_simulate_job, jobs)
             merged: dict[str, list[FloatArray]] = {}
+            per_segment = []
             for run, sim in zip(self.runs, outs, strict=True):
-                res = residuals(sim, bag_observables(run, config.robot.body_length))
+                bag = bag_observables(run, config.robot.body_length)
+                res = residuals(sim, bag)
                 for name, r in res.items():
                     merged.setdefault(name, []).append(r.ravel())
+                terms = np.zeros(len(bag['speed']))
+                for name, d in residuals(sim, bag, flat=False).items():
+                    terms[:len(d)] += np.nansum(soft_l1(d / SCALES[name]).reshape(len(d), -1), axis=1)
+                per_segment.append(terms)
             self.cache[key] = {name: np.concatenate(rs) for name, rs in merged.items()}
+            self.segment_terms[key] = np.concatenate(per_segment)
         return self.cache[key]
 
     def distance(self, values: Sequence[float]) -> float:
@@ -445,6 +453,9 @@ class FitResult:
     evaluations: int
 
 
+#: Resamples of the segments for each fitted value's interval, and their seed.
+BOOTSTRAP_RESAMPLES = 2000
+BOOTSTRAP_SEED = 0
 #: Grid points per parameter of the first, coarse search (by the number of parameters fitted; none beyond).
 GRID_POINTS: dict[int, int] = {1: 21, 2: 7}
 
@@ -453,11 +464,10 @@ def fit(problem: Problem, max_evaluations: int = 40) -> FitResult:
     """Minimise the distance: a coarse grid over the bounds (``scipy.optimize.brute``, ``GRID_POINTS``; the
     distance of a chaotic run is rough, so a local search alone stalls in the nearest dip), then scipy's
     Powell (bounded, parameters scaled to [0, 1], at most ``max_evaluations``) from the best of the grid and
-    the defaults. Each fitted value's 95 % interval is a profile over the values the search evaluated with
-    the other parameters at their fit: from the nearest value on each side whose distance exceeds
-    ``D_min * (1 + F / nu)`` (``F`` the 95 % chi-square quantile with one degree of freedom, ``nu`` the terms
-    less the parameters), after refining that bracket by four bisection steps on the sign of the excess (an end is a
-    rejected value, so the interval errs wide)."""
+    the defaults. Each fitted value's 95 % interval is a bootstrap over the runs' segments
+    (``BOOTSTRAP_RESAMPLES``, seeded): each resample of the segments picks the evaluated parameter values
+    with the least distance over it, and the interval is the 2.5 and 97.5 percentiles of those picks (widened
+    to hold the fit). No further sim runs: every evaluated value keeps its distance per segment."""
     lo = np.array([p.lo for p in problem.params])
     hi = np.array([p.hi for p in problem.params])
     k = len(lo)
@@ -483,37 +493,19 @@ def fit(problem: Problem, max_evaluations: int = 40) -> FitResult:
     if d_start < d_min:
         best, d_min = start, d_start
     terms = int(sum(r.size for r in problem.residuals(value(best)).values()))
-    nu = max(1, terms - k)
-    limit = d_min * (1.0 + float(stats.chi2.ppf(0.95, 1)) / nu) + 1e-9
+    # the interval: a bootstrap over the runs' segments, each resample's fit the best of the evaluated values
+    keys = list(problem.segment_terms)
+    table = np.stack([problem.segment_terms[key] for key in keys])      # (values evaluated, segments)
+    points = np.array(keys)
+    rng = np.random.default_rng(BOOTSTRAP_SEED)
+    segments = table.shape[1]
+    picks = np.array([int(np.argmin(table[:, rng.integers(0, segments, segments)].sum(axis=1)))
+                      for _ in range(BOOTSTRAP_RESAMPLES)])
+    fitted = value(best)
     intervals = []
     for i in range(k):
-        def excess(ui: float, i: int = i) -> float:
-            u = best.copy()
-            u[i] = ui
-            return objective(u) - limit
-        ends = []
-        for edge in (0.0, 1.0):
-            # the evaluated values on this side with the others at their fit; the nearest rejected one brackets
-            tried = sorted({float(key[i]) for key in problem.cache
-                            if all(abs(key[j] - value(best)[j]) < 1e-9 for j in range(k) if j != i)})
-            side = [(v - lo[i]) / (hi[i] - lo[i]) for v in tried]
-            side = [u for u in side if (u < best[i]) == (edge < best[i]) and u != best[i]]
-            side.sort(key=lambda u: abs(u - best[i]))
-            outer = next((u for u in side if excess(u) > 0.0), None)
-            if outer is None:
-                outer = edge
-                if excess(edge) <= 0.0:
-                    ends.append(edge)
-                    continue
-            inner = float(best[i])
-            for _ in range(4):                # bisection on the sign of the excess
-                mid = 0.5 * (inner + outer)
-                if excess(mid) > 0.0:
-                    outer = mid
-                else:
-                    inner = mid
-            ends.append(outer)
-        intervals.append(tuple(value(np.where(np.arange(k) == i, e, best))[i] for e in ends))
+        lo_i, hi_i = np.percentile(points[picks, i], [2.5, 97.5])
+        intervals.append((float(min(lo_i, fitted[i])), float(max(hi_i, fitted[i]))))
     return FitResult(tuple(p.name for p in problem.params), tuple(value(best)),
                      tuple((a, b) for a, b in intervals), d0, d_min, terms,
                      gaps(problem.residuals(value(x0))), gaps(problem.residuals(value(best))), len(problem.cache))

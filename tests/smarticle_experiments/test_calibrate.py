@@ -1,0 +1,126 @@
+"""smarticle-calibrate: preset files in the builder, the sim bridge and a spec; a fit on a sim bag; bad input."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from smarticle_common.gait import GaitConfig
+from smarticle_experiments import calibrate as cal
+from smarticle_experiments.calibrate_cli import main
+from smarticle_sim.batch import run_trial
+from smarticle_sim.config_builder import build_config
+from smarticle_sim.errors import ConfigError
+from smarticle_sim.scenes import pair_scene
+
+
+def _preset_file(tmp_path: Path, friction: float = 0.42) -> Path:
+    path = tmp_path / 'lab.yaml'
+    path.write_text(yaml.safe_dump({'preset': 'small', 'physics': {'friction_body_plate': friction},
+                                    'robot': {'servo_speed': 9.5}, 'calibration': {'bags': ['x']}}))
+    return path
+
+
+def test_build_config_loads_a_preset_file_and_overrides_apply_on_top(tmp_path: Path) -> None:
+    path = _preset_file(tmp_path)
+    config = build_config(str(path))
+    assert config.physics.friction_body_plate == 0.42
+    assert config.robot.servo_speed == 9.5
+    assert config.robot.name == 'small'
+    assert build_config(str(path), physics={'friction_body_plate': 0.5}).physics.friction_body_plate == 0.5
+
+
+def test_a_bad_preset_file_is_one_line(tmp_path: Path) -> None:
+    bad = tmp_path / 'bad.yaml'
+    bad.write_text(yaml.safe_dump({'physics': {'friction_plate': 0.3}}))
+    with pytest.raises(ConfigError, match='friction_plate is not a PhysicsConfig field'):
+        build_config(str(bad))
+    with pytest.raises(ConfigError, match='cannot be read'):
+        build_config(str(tmp_path / 'missing.yaml'))
+
+
+def test_the_sim_bridge_takes_a_preset_file(tmp_path: Path) -> None:
+    from smarticle_sim.bridge import PARAMS, BridgeSettings
+
+    values = {p.name: p.default for p in PARAMS}
+    values['preset'] = str(_preset_file(tmp_path))
+    settings = BridgeSettings.from_values(values)
+    assert settings.sim.physics.friction_body_plate == 0.42
+    assert settings.sim.robot.servo_speed == 9.5
+
+
+def test_an_experiment_trial_takes_a_preset_file(tmp_path: Path) -> None:
+    from smarticle_experiments.configs import config_of
+
+    config = config_of({'preset': str(_preset_file(tmp_path)), 'physics': {'restitution': 0.5}})
+    assert (config.physics.friction_body_plate, config.physics.restitution) == (0.42, 0.5)
+
+
+def _pair_bag(tmp_path: Path, friction: float, periods: int = 8) -> Path:
+    config = build_config('small', physics={'friction_body_plate': friction})
+    scene = pair_scene(config.robot, GaitConfig.from_degrees(90.0), 1.3, 0.0, math.pi)
+    rec = run_trial(config, scene, periods)
+    return cal.write_pose_bag(rec.time, rec.poses, tmp_path / 'pair', 'test pair')
+
+
+def test_a_sim_bags_own_value_is_far_nearer_than_the_default(tmp_path: Path) -> None:
+    """Each segment restarts at rest from the bag's poses, so even the bag's own value leaves a small gap."""
+    bag = _pair_bag(tmp_path, 0.45)
+    run = cal.load_run(bag)
+    assert run.robots == 2 and run.periods == 8
+    assert cal.segment_starts(run) == [0, 2, 4]
+    problem = cal.Problem([run], 'small', cal.parse_fit('friction_body_plate'))
+    assert problem.distance([0.30]) > 10.0 * problem.distance([0.45])
+
+
+@pytest.mark.slow
+def test_the_cli_recovers_a_friction_inside_its_interval(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The sim bag is rebuilt exactly, so its value is a sharp minimum; the grid of the bounds holds it."""
+    bag = _pair_bag(tmp_path, 0.45)
+    with pytest.raises(SystemExit) as done:
+        main([str(bag), '--fit', 'friction_body_plate=0.25:0.65', '--out', str(tmp_path / 'out')])
+    assert done.value.code == 0
+    text = capsys.readouterr().out
+    assert 'fitted (95 % profile interval)' in text
+    data = yaml.safe_load((tmp_path / 'out' / 'preset.yaml').read_text())
+    fitted = data['calibration']['fitted']['friction_body_plate']
+    lo, hi = fitted['interval_95']
+    assert lo <= 0.45 <= hi
+    assert abs(fitted['value'] - 0.45) < 0.02
+    assert data['physics']['friction_body_plate'] == fitted['value']
+    assert build_config(str(tmp_path / 'out' / 'preset.yaml')).physics.friction_body_plate == fitted['value']
+    assert (tmp_path / 'out' / 'gaps.png').stat().st_size > 0
+
+
+def _run_cli(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str]:
+    with pytest.raises(SystemExit) as done:
+        main(args)
+    err = capsys.readouterr().err
+    return int(done.value.code or 0), err
+
+
+def test_bad_input_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code, err = _run_cli([str(tmp_path / 'nothing')], capsys)
+    assert code == 2 and err.count('\n') == 1 and 'does not exist' in err
+
+    bag = cal.write_pose_bag(np.arange(0.0, 8.0, 0.05), np.zeros((160, 1, 3)), tmp_path / 'still', 'test')
+    code, err = _run_cli([str(bag), '--fit', 'friction_plate'], capsys)
+    assert code == 2 and err.count('\n') == 1 and "'friction_plate' is no parameter to fit" in err
+
+    from smarticle_bags.csv_import import SENSOR_QOS, encode_pose_array
+    from smarticle_bags.writer import BagWriter
+
+    other = tmp_path / 'no_poses'
+    with BagWriter(other) as writer:
+        writer.add_topic('/elsewhere', 'geometry_msgs/msg/PoseArray', [SENSOR_QOS])
+        writer.write('/elsewhere', encode_pose_array(0, np.zeros((1, 3))), 0)
+        writer.close()
+    code, err = _run_cli([str(other)], capsys)
+    assert code == 2 and err.count('\n') == 1 and 'holds no /smarticles/poses' in err
+
+    code, err = _run_cli([str(bag), '--preset', 'tiny'], capsys)
+    assert code == 2 and err.count('\n') == 1 and 'tiny' in err
