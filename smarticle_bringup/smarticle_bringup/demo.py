@@ -32,7 +32,7 @@ from typing import Any, NoReturn
 
 import numpy as np
 from smarticle_common.cli import SeedSyntaxError, add_version, parse_seeds
-from smarticle_common.facts import GAIT_PERIOD, PRESETS, RobotSpec
+from smarticle_common.facts import GAIT_PERIOD, RobotSpec
 from smarticle_common.runs import Recording, save_npz
 
 from .demo_scenes import FEEDBACK, GLIDERS, MIN_PERIODS, TRAVEL_MIN_W_PER_100, DemoScene, travelling
@@ -113,6 +113,9 @@ def build_parser(prog: str = 'smarticle-demo') -> argparse.ArgumentParser:
                         help='serve the live view to Foxglove on ws://localhost:8765 (smarticle-view; open it in '
                              'Foxglove with smarticle_bringup/config/foxglove_layout.json)')
     parser.add_argument('--view-port', type=int, default=8765, help='WebSocket port of --view (default 8765)')
+    parser.add_argument('--preset', default=None, metavar='FILE',
+                        help="a preset file (smarticle-calibrate's preset.yaml) for every part's robots "
+                        "(default: each part's own preset)")
     parser.add_argument('--out', type=Path, default=Path('out/demo'), help='output folder (default out/demo)')
     return parser
 
@@ -129,6 +132,16 @@ def option_problem(args: argparse.Namespace) -> str | None:
         value = getattr(args, option[2:].replace('-', '_'))
         if not (math.isfinite(value) and value > 0):
             return f'{option} must be a number > 0, got {value:g}'
+    if args.preset is not None:
+        from smarticle_sim.config_builder import build_config, is_preset_file
+        from smarticle_sim.errors import ConfigError
+
+        if not is_preset_file(args.preset):
+            return f'--preset must be a preset file (.yaml), got {args.preset!r}'
+        try:
+            build_config(args.preset)
+        except ConfigError as err:
+            return f'--preset: {err}'
     sim = 'the sim bridge parameter'
     checks: list[tuple[str, str, ParamSpec, Any]] = [
         ('--alpha-max', 'the gait and sim bridge parameter', bridge['alpha_max_deg'], args.alpha_max),
@@ -194,8 +207,9 @@ def crowd_part(args: argparse.Namespace) -> Part:
     """Part 1 with the dense or random start of the sim bridge (``--scene dense|random``), open loop."""
     from smarticle_sim.bridge import BridgeSettings
 
+    preset = args.preset or 'small'
     robots = BridgeSettings.defaults(alpha_max_deg=args.alpha_max, robots=args.robots, scene=args.scene,
-                                     seed=args.seed, phase_jitter=args.phase_jitter).scene().robots
+                                     seed=args.seed, phase_jitter=args.phase_jitter, preset=preset).scene().robots
     offsets = clock_offsets(len(robots), args.seed) if args.clock_noise else None
     own = []
     for k, robot in enumerate(robots):
@@ -204,8 +218,9 @@ def crowd_part(args: argparse.Namespace) -> Part:
             values['clock_rate_offset'] = float(offsets[k])
         own.append(values)
     jitter = f', phases +-{args.phase_jitter:g} period' if args.scene == 'dense' else ''
-    return Part('gliders', f'gliders from a {args.scene} start (open loop)', PRESETS['small'], args.scene,
-                args.robots, args.periods, False, {'preset': 'small', 'phase_jitter': float(args.phase_jitter)},
+    spec = replace(GLIDERS, preset=preset).spec
+    return Part('gliders', f'gliders from a {args.scene} start (open loop)', spec, args.scene,
+                args.robots, args.periods, False, {'preset': preset, 'phase_jitter': float(args.phase_jitter)},
                 own, f'{args.robots} small robots, {args.scene} start{jitter}, open loop', None)
 
 
@@ -214,14 +229,14 @@ def plan_parts(args: argparse.Namespace) -> list[Part]:
     parts = []
     if args.only in (None, 'gliders'):
         if args.scene == 'pair':
-            scene = replace(GLIDERS, alpha_max_deg=args.alpha_max,
+            scene = replace(GLIDERS, alpha_max_deg=args.alpha_max, preset=args.preset or GLIDERS.preset,
                             start=replace(GLIDERS.start, phases=(0.0, args.phase_offset % 1.0)))
             parts.append(pair_part(scene, args, args.periods, False))
         else:
             parts.append(crowd_part(args))
     if args.only in (None, 'feedback'):
-        parts.append(pair_part(replace(FEEDBACK, alpha_max_deg=args.alpha_max), args, args.feedback_periods,
-                               args.feedback))
+        feedback = replace(FEEDBACK, alpha_max_deg=args.alpha_max, preset=args.preset or FEEDBACK.preset)
+        parts.append(pair_part(feedback, args, args.feedback_periods, args.feedback))
     return parts
 
 

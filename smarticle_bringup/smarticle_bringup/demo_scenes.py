@@ -54,7 +54,7 @@ class DemoScene:
 
     key: str                          # 'gliders' or 'feedback': the output folder and the label
     title: str                        # one line: what the part shows
-    preset: str                       # robot preset (``smarticle_common.facts.PRESETS``)
+    preset: str                       # robot preset (``smarticle_common.facts.PRESETS``) or a preset file
     start: PairStart                  # the start before the seeded jitter
     jitter: tuple[float, float, float]   # uniform jitter of r (BL), theta, phi (deg): +- these
     periods: float                    # gait periods to run (the default)
@@ -64,8 +64,10 @@ class DemoScene:
 
     @property
     def spec(self) -> RobotSpec:
-        """The robot of this scene."""
-        return PRESETS[self.preset]
+        """The robot of this scene (of its preset file's overrides when ``preset`` is a preset file)."""
+        from smarticle_sim.config_builder import build_config, is_preset_file
+
+        return build_config(self.preset).robot if is_preset_file(self.preset) else PRESETS[self.preset]
 
     def gait(self) -> GaitConfig:
         """The gait of both robots (phase 0; each robot's phase is in ``start.phases``)."""

@@ -124,3 +124,24 @@ def test_bad_input_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str
 
     code, err = _run_cli([str(bag), '--preset', 'tiny'], capsys)
     assert code == 2 and err.count('\n') == 1 and 'tiny' in err
+
+
+def test_the_demo_takes_a_preset_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from smarticle_bringup.demo import build_parser, main, plan_parts, write_params
+
+    path = _preset_file(tmp_path)
+    args = build_parser().parse_args(['--preset', str(path)])
+    params = tmp_path / 'params.yaml'
+    for part in plan_parts(args):
+        assert part.spec.servo_speed == 9.5 and part.spec.name == 'small'
+        write_params(part, args, params)
+        data = yaml.safe_load(params.read_text(encoding='utf-8'))
+        assert data['/sim_bridge']['ros__parameters']['preset'] == str(path)
+        assert data['/smarticle_0/gait']['ros__parameters']['servo_speed'] == 9.5
+    bad = tmp_path / 'bad.yaml'
+    bad.write_text('physics: {friction_plate: 0.3}\n')
+    out = tmp_path / 'demo'
+    assert main(['--preset', str(bad), '--out', str(out)], prog='demo.sh') == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and '--preset' in err and 'friction_plate' in err
+    assert not out.exists()
