@@ -309,15 +309,17 @@ class SigintShutsDown:
 
 def run_node(factory: Callable[[], Node], node_name: str, args: list[str] | None = None,
              startup_errors: tuple[type[BaseException], ...] = (ParameterError,),
-             params: Sequence[ParamSpec] | None = None) -> int:
+             params: Sequence[ParamSpec] | None = None,
+             executor_factory: Callable[[], Any] | None = None) -> int:
     """Run a node the Jazzy way (init, spin until Ctrl-C or shutdown, destroy, try_shutdown); return the exit code.
 
     ``--help`` / ``-h`` and ``--version`` before ``--ros-args`` print the node's help (its parameter
     table: ``params``, else the one ``*PARAMS`` table of the factory's module) or version and return 0
     without starting anything.
 
-    A node with a ``run(executor) -> int`` method drives its own loop (the sim bridge's lock-step) and
-    its return value is the exit code; any other node is spun. An error of ``startup_errors`` raised
+    A node with a ``run(executor) -> int`` method drives its own loop (the sim bridge's lock-step) on an
+    executor of ``executor_factory`` (default rclpy's SingleThreadedExecutor) and its return value is the exit
+    code; any other node is spun. An error of ``startup_errors`` raised
     while the node is being built (a bad parameter or file) is logged as fatal and ends the process with
     exit code 2; the same error later propagates. An rclpy error raised because a signal shut the
     context down under the executor, or is about to (Jazzy's races, e.g. "failed to initialize wait set",
@@ -329,11 +331,12 @@ def run_node(factory: Callable[[], Node], node_name: str, args: list[str] | None
     if _answer_help_or_version(factory, node_name, args, params):
         return 0
     with SigintShutsDown(node_name) as signals:
-        return _init_and_run(factory, node_name, args, startup_errors, signals)
+        return _init_and_run(factory, node_name, args, startup_errors, signals, executor_factory)
 
 
 def _init_and_run(factory: Callable[[], Node], node_name: str, args: list[str] | None,
-                  startup_errors: tuple[type[BaseException], ...], signals: SigintShutsDown) -> int:
+                  startup_errors: tuple[type[BaseException], ...], signals: SigintShutsDown,
+                  executor_factory: Callable[[], Any] | None = None) -> int:
     """``run_node`` once its signal handler is in place: init, build, run or spin, destroy, shut down."""
     try:     # a malformed parameter file: one line naming the file and line, not rcl's traceback
         for path in params_files(sys.argv if args is None else args):
@@ -353,7 +356,7 @@ def _init_and_run(factory: Callable[[], Node], node_name: str, args: list[str] |
         node = factory()
         run = getattr(node, 'run', None)
         if callable(run):
-            executor = SingleThreadedExecutor()
+            executor = (executor_factory or SingleThreadedExecutor)()
             executor.add_node(node)
             code = int(run(executor))
         else:

@@ -8,7 +8,8 @@ feedback a feedback node per robot, the glider monitor)
   (``smarticle-compose``) but the glider monitor, which runs beside it in its own process, on each executor
   of ``--executors`` (``single``: rclpy's SingleThreadedExecutor; ``events``: rclpy's experimental
   EventsExecutor);
-* as separate processes (``smarticle-launch``);
+* as separate processes (``smarticle-launch``; the bridge's loop on rclpy's EventsExecutor, the other nodes spun
+  by rclpy's SingleThreadedExecutor);
 
 each with feedback on and off, next to the batch core (``Runner`` with the gait cores and, with feedback,
 the impact controllers; no ROS) on the same scene and duration. The ROS figure is the sim bridge's own (sim
@@ -149,7 +150,7 @@ def configurations(executors: list[str], separate: bool) -> list[tuple[str, str,
         out.append(('batch core (no ROS)', '-', feedback))
         out += [('composed', executor, feedback) for executor in executors]
         if separate:
-            out.append(('separate processes', 'single', feedback))
+            out.append(('separate processes', 'events', feedback))
     return out
 
 
