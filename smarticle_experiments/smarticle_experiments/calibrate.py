@@ -56,8 +56,9 @@ FloatArray = npt.NDArray[np.float64]
 
 #: Gait periods per segment of a run (the unit of the observables and of the profile's terms).
 SEGMENT_PERIODS = 2
-#: The scale of each observable's gap in the distance (its unit: BL / period, rad / period, BL, rad, N).
-SCALES: dict[str, float] = {'speed': 0.002, 'turn': 0.01, 'r': 0.05, 'phi': 0.1, 'fsr': 0.05}
+#: The scale of each observable's gap in the distance (its unit: BL / period, rad / period, BL, rad, N). FSR's is
+#: wide: a contact is there or not, and a pose a fraction of a millimetre off switches a period's peak.
+SCALES: dict[str, float] = {'speed': 0.002, 'turn': 0.01, 'r': 0.05, 'phi': 0.1, 'fsr': 0.5}
 #: Units of the observables, for the report.
 UNITS: dict[str, str] = {'speed': 'BL/period', 'turn': 'rad/period', 'r': 'BL', 'phi': 'rad', 'fsr': 'N'}
 
@@ -333,8 +334,9 @@ def simulate(run: BagRun, config: SimConfig, engine: str = 'bullet') -> dict[str
 
     firsts, lasts, peaks = [], [], []
     for s in segment_starts(run):
-        rec = run_trial(config, scene_of(run, config, s), float(seg + 1), record_fsr=want_fsr, controllers=clocks,
-                        engine=engine_factory(engine))
+        # FSR: every control tick, so each period's peak is the peak over all its ticks (the bag's sampled peaks)
+        rec = run_trial(config, scene_of(run, config, s), float(seg + 1), sample_every=1 if want_fsr else None,
+                        record_fsr=want_fsr, controllers=clocks, engine=engine_factory(engine))
         times = np.asarray(rec.time)
         strobe = _strobe(times, np.asarray(rec.poses), run.period * np.arange(seg + 2))
         firsts.append(strobe[1])
