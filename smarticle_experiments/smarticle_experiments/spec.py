@@ -151,6 +151,24 @@ class ExperimentSpec:
         return out
 
 
+def _inline_preset_file(name: str, known: Any, base: dict[str, Any]) -> None:
+    """A preset file (``smarticle-calibrate``'s) in the trial's own parameters: its base preset, and its physics and
+    robot overrides under the spec's own, so a trial's key holds the file's values rather than its path."""
+    from smarticle_sim.config_builder import read_preset_file
+    from smarticle_sim.errors import ConfigError
+
+    try:
+        preset, physics, robot = read_preset_file(str(base['preset']))
+    except ConfigError as err:
+        raise SpecError(f'{name}: {err}') from None
+    base['preset'] = preset
+    for group, values in (('physics', physics), ('robot', robot)):
+        if values and known is not None and group not in known.params.GROUPS:
+            raise SpecError(f'{name}: the preset file sets {group} overrides, not supported by this kind')
+        if values:
+            base[group] = {**values, **dict(base.get(group) or {})}
+
+
 def seed_runs(seeds: Sequence[int]) -> list[tuple[int, int]]:
     """Sorted seeds as runs of consecutive ones: [0, 1, 2, 5] -> [(0, 2), (5, 5)]."""
     runs: list[list[int]] = []
@@ -370,6 +388,8 @@ def spec_from_mapping(data: Any, source: str = '') -> ExperimentSpec:
         if known is not None and 'preset' not in known.defaults:
             raise SpecError(f'{name}: preset is not supported by kind {kind!r}')
         base['preset'] = data['preset']
+        if str(data['preset']).endswith(('.yaml', '.yml')):     # a preset file (config_builder.is_preset_file)
+            _inline_preset_file(name, known, base)
     if 'periods' in data:
         _check_positive(name, 'periods', data['periods'])
         base['periods'] = float(data['periods'])

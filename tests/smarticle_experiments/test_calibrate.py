@@ -145,3 +145,24 @@ def test_the_demo_takes_a_preset_file(tmp_path: Path, capsys: pytest.CaptureFixt
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and '--preset' in err and 'friction_plate' in err
     assert not out.exists()
+
+
+def test_an_experiment_spec_takes_a_preset_file_and_keys_trials_by_its_values(tmp_path: Path) -> None:
+    from smarticle_experiments.errors import SpecError
+    from smarticle_experiments.spec import load_spec
+
+    preset = _preset_file(tmp_path)
+    spec_path = tmp_path / 'lab_p1.yaml'
+    spec_path.write_text(yaml.safe_dump({
+        'name': 'lab_p1', 'description': 'p1 with a calibrated preset', 'kind': 'dense', 'preset': str(preset),
+        'periods': 10, 'physics': {'restitution': 0.5}, 'params': {'robots': 7, 'alpha_max_deg': 90},
+        'seeds': {'start': 0, 'count': 1}}))
+    spec = load_spec(str(spec_path))
+    assert spec.base['preset'] == 'small'
+    assert spec.base['physics'] == {'friction_body_plate': 0.42, 'restitution': 0.5}
+    assert spec.base['robot'] == {'servo_speed': 9.5}
+    bad = tmp_path / 'bad.yaml'
+    bad.write_text('physics: {friction_plate: 0.3}\n')
+    spec_path.write_text(spec_path.read_text().replace(str(preset), str(bad)))
+    with pytest.raises(SpecError, match='friction_plate'):
+        load_spec(str(spec_path))
