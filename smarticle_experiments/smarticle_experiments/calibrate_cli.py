@@ -6,7 +6,8 @@ For each bag it rebuilds the run's scene (the first tracked poses after the gait
 robot's clock rate and phase), simulates it and prints the gap per observable at the preset's values; with
 ``--fit`` it fits the named parameters (``smarticle_experiments.calibrate``), prints the fitted values with
 their 95 % intervals and the gaps after the fit, draws both (DIR/gaps.png) and writes DIR/preset.yaml, which
-the sim bridge (``preset:=FILE``), the demo (``--preset FILE``) and an experiment spec (``preset: FILE``) load.
+the sim bridge (its ``preset`` parameter), the demo (``--preset FILE``) and an experiment spec (``preset: FILE``)
+load.
 Bad input is one line on stderr and exit 2.
 """
 
