@@ -110,7 +110,7 @@ def run(ns: argparse.Namespace) -> int:
     print(cal.format_gaps(f'gap per observable (distance {result.distance_default:.4g} at {ns.preset}, '
                           f'{result.distance_fit:.4g} fitted, {result.terms} terms):',
                           result.gaps_default, result.gaps_fit))
-    print('fitted (95 % profile interval):')
+    print('fitted (95 % bootstrap interval over segments):')
     for name, value, (lo, hi) in zip(result.names, result.values, result.intervals, strict=True):
         print(f'  {name} = {value:.4g} [{lo:.4g}, {hi:.4g}]')
     print(f'evaluations: {result.evaluations}')

@@ -85,7 +85,7 @@ def test_the_cli_recovers_a_friction_inside_its_interval(tmp_path: Path, capsys:
         main([str(bag), '--fit', 'friction_body_plate=0.25:0.65', '--out', str(tmp_path / 'out')])
     assert done.value.code == 0
     text = capsys.readouterr().out
-    assert 'fitted (95 % profile interval)' in text
+    assert 'fitted (95 % bootstrap interval over segments)' in text
     data = yaml.safe_load((tmp_path / 'out' / 'preset.yaml').read_text())
     fitted = data['calibration']['fitted']['friction_body_plate']
     lo, hi = fitted['interval_95']
