@@ -19,6 +19,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from smarticle_common.cli import add_version, closed_pipe_safe
 from smarticle_common.facts import GAIT_PERIOD
 
 PROG = 'smarticle-calibrate'
@@ -28,6 +29,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog=PROG, description='Compare the sim with recorded runs (bags) and fit named parameters to them; '
         'write a calibrated preset file.')
+    add_version(parser, 'smarticle_experiments')
     parser.add_argument('bags', nargs='+', metavar='BAG', help='bag folders of recorded runs')
     parser.add_argument('--fit', metavar='NAME[=LO:HI][,...]', default='',
                         help='parameters to fit (PhysicsConfig / RobotSpec fields, e.g. friction_body_plate, '
@@ -120,6 +122,7 @@ def run(ns: argparse.Namespace) -> int:
     return 0
 
 
+@closed_pipe_safe
 def main(argv: list[str] | None = None) -> None:
     ns = build_parser().parse_args(argv)
     sys.exit(run(ns))
