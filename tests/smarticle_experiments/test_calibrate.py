@@ -166,3 +166,28 @@ def test_an_experiment_spec_takes_a_preset_file_and_keys_trials_by_its_values(tm
     spec_path.write_text(spec_path.read_text().replace(str(preset), str(bad)))
     with pytest.raises(SpecError, match='friction_plate'):
         load_spec(str(spec_path))
+
+
+@pytest.mark.slow
+def test_trials_on_dask_give_the_same_gaps(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    bag = _pair_bag(tmp_path, 0.35, periods=5)
+    tables = []
+    for workers in ('0', '1'):
+        with pytest.raises(SystemExit) as done:
+            main([str(bag), '--workers', workers, '--out', str(tmp_path / f'out{workers}')])
+        assert done.value.code == 0
+        out = capsys.readouterr().out
+        tables.append(out[out.index('gap per observable'):out.index('drawn:')])
+    assert tables[0] == tables[1]
+    assert 'speed' in tables[0] and 'phi' in tables[0]
+
+
+def test_each_robots_measured_clock_rate_drives_its_gait(tmp_path: Path) -> None:
+    from dataclasses import replace
+
+    run = cal.load_run(_pair_bag(tmp_path, 0.30, periods=5))
+    config = build_config('small')
+    same = cal.simulate(run, config)
+    fast = cal.simulate(replace(run, rates=(1.0, 1.1)), config)
+    assert np.array_equal(same['speed'], cal.simulate(run, config)['speed'])
+    assert not np.allclose(same['phi'], fast['phi'])
