@@ -63,7 +63,7 @@ SCALES: dict[str, float] = {'speed': 0.002, 'turn': 0.01, 'r': 0.05, 'phi': 0.1,
 UNITS: dict[str, str] = {'speed': 'BL/period', 'turn': 'rad/period', 'r': 'BL', 'phi': 'rad', 'fsr': 'N'}
 
 
-class CalibrationError(ExperimentError, ValueError):
+class BagFitError(ExperimentError, ValueError):
     """Bad input to the calibration: a missing bag, a bag without poses, an unknown parameter."""
 
 
@@ -110,7 +110,7 @@ def fittable() -> dict[str, Parameter]:
 
 
 def parse_fit(text: str) -> list[Parameter]:
-    """``NAME[=LO:HI][,NAME...]`` into parameters; CalibrationError naming an unknown name or a bad bound."""
+    """``NAME[=LO:HI][,NAME...]`` into parameters; BagFitError naming an unknown name or a bad bound."""
     known = fittable()
     out = []
     for item in (s.strip() for s in text.split(',')):
@@ -118,19 +118,19 @@ def parse_fit(text: str) -> list[Parameter]:
             continue
         name, _, bounds = item.partition('=')
         if name not in known:
-            raise CalibrationError(f'--fit: {name!r} is no parameter to fit; known: {", ".join(sorted(known))}')
+            raise BagFitError(f'--fit: {name!r} is no parameter to fit; known: {", ".join(sorted(known))}')
         param = known[name]
         if bounds:
             try:
                 lo, hi = (float(v) for v in bounds.split(':'))
             except ValueError:
-                raise CalibrationError(f'--fit: {item!r}: bounds are LO:HI, two numbers') from None
+                raise BagFitError(f'--fit: {item!r}: bounds are LO:HI, two numbers') from None
             if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-                raise CalibrationError(f'--fit: {item!r}: bounds need LO < HI, both finite')
+                raise BagFitError(f'--fit: {item!r}: bounds need LO < HI, both finite')
             param = Parameter(name, param.group, lo, hi)
         out.append(param)
     if not out:
-        raise CalibrationError('--fit names no parameter')
+        raise BagFitError('--fit names no parameter')
     return out
 
 
@@ -161,7 +161,7 @@ class BagRun:
 def _strobe(times: FloatArray, xyh: FloatArray, at: npt.NDArray[Any]) -> FloatArray:
     """Poses at times ``at`` (nearest sample within half a sampling interval; NaN otherwise), headings unwrapped."""
     if len(times) < 2:
-        raise CalibrationError('a run needs at least two pose samples')
+        raise BagFitError('a run needs at least two pose samples')
     step = float(np.median(np.diff(times)))
     idx = np.clip(np.searchsorted(times, at), 1, len(times) - 1)
     idx = np.where(np.abs(times[idx - 1] - at) <= np.abs(times[idx] - at), idx - 1, idx)
@@ -181,7 +181,7 @@ def _unwrap(h: FloatArray) -> FloatArray:
 
 def load_run(path: str | Path, period: float = GAIT_PERIOD, alpha_max_deg: float | None = None,
              duration: float | None = None) -> BagRun:
-    """Read a bag into a BagRun; CalibrationError (one line) if it is missing or holds no poses."""
+    """Read a bag into a BagRun; BagFitError (one line) if it is missing or holds no poses."""
     from smarticle_bags import arrays
     from smarticle_bags.errors import BagError
     from smarticle_bags.reader import BagReader
@@ -193,7 +193,7 @@ def load_run(path: str | Path, period: float = GAIT_PERIOD, alpha_max_deg: float
         reader = BagReader(path)
         poses_topic = contract.topic('poses')
         if poses_topic not in reader.topics:
-            raise CalibrationError(f'{path}: holds no {poses_topic}: nothing to compare')
+            raise BagFitError(f'{path}: holds no {poses_topic}: nothing to compare')
         poses = arrays.read_poses(reader)
         start_topic = contract.topic('start')
         starts = ([m.stamp.sec + 1e-9 * m.stamp.nanosec for _, m in reader.decoded([start_topic])]
@@ -202,21 +202,21 @@ def load_run(path: str | Path, period: float = GAIT_PERIOD, alpha_max_deg: float
         states = arrays.read_robot_topic(reader, 'joint_states')
         fsr = arrays.read_fsr(reader)
     except BagError as err:
-        raise CalibrationError(str(err)) from None
+        raise BagFitError(str(err)) from None
     times, xyh = poses.stamp, poses.xyh
     if len(times) < 2 or xyh.shape[1] == 0:
-        raise CalibrationError(f'{path}: {poses_topic} holds fewer than two poses')
+        raise BagFitError(f'{path}: {poses_topic} holds fewer than two poses')
     start = starts[-1] if starts else float(times[0])
     if not starts:
         notes.append('no /smarticles/start: the gaits start at the first pose')
     seen = np.all(np.isfinite(xyh[:, :, :2]), axis=(1, 2)) & (times >= start - 1e-6)
     if not np.any(seen):
-        raise CalibrationError(f'{path}: no pose after the gait start sees every robot')
+        raise BagFitError(f'{path}: no pose after the gait start sees every robot')
     first = xyh[int(np.argmax(seen))]
     end = float(times[-1]) if duration is None else min(float(times[-1]), start + duration)
     n_periods = int(math.floor((end - start) / period + 1e-9))
     if n_periods < SEGMENT_PERIODS + 1:
-        raise CalibrationError(f'{path}: {end - start:.3g} s after the gait start is shorter than '
+        raise BagFitError(f'{path}: {end - start:.3g} s after the gait start is shorter than '
                                f'{SEGMENT_PERIODS + 1} gait periods of {period:g} s')
     strobe = _strobe(times, xyh, start + period * np.arange(n_periods + 1))
     n = xyh.shape[1]
@@ -257,7 +257,7 @@ def load_run(path: str | Path, period: float = GAIT_PERIOD, alpha_max_deg: float
                 if np.any(inside):
                     fsr_peaks[j, k] = float(np.max(force[inside]))
     if not np.any(np.all(np.isfinite(strobe[:n_periods - SEGMENT_PERIODS:SEGMENT_PERIODS, :, :2]), axis=(1, 2))):
-        raise CalibrationError(f'{path}: no segment start (every {SEGMENT_PERIODS} periods) sees every robot')
+        raise BagFitError(f'{path}: no segment start (every {SEGMENT_PERIODS} periods) sees every robot')
     return BagRun(Path(path).name, start, period, math.radians(amplitude), first, strobe, tuple(phases),
                   tuple(rates), fsr_peaks, tuple(notes))
 
@@ -543,7 +543,7 @@ def write_preset(path: str | Path, preset: str, params: Sequence[Parameter], res
     try:
         build_config(str(out))
     except ConfigError as err:
-        raise CalibrationError(f'the written preset file does not load: {err}') from None
+        raise BagFitError(f'the written preset file does not load: {err}') from None
     return out
 
 

@@ -74,9 +74,9 @@ def run(ns: argparse.Namespace) -> int:
         runs = []
         for bag in ns.bags:
             if not Path(bag).exists():
-                raise cal.CalibrationError(f'bag {bag} does not exist')
+                raise cal.BagFitError(f'bag {bag} does not exist')
             runs.append(cal.load_run(bag, ns.period, ns.alpha_max_deg, ns.duration))
-    except (cal.CalibrationError, ConfigError) as err:
+    except (cal.BagFitError, ConfigError) as err:
         return _fail(str(err))
     for r in runs:
         clocks = ', '.join(f'{k}: rate {rate:.4f} phase {phase:.3f}' for k, (rate, phase)
