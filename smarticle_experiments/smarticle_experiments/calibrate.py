@@ -54,7 +54,7 @@ from .errors import ExperimentError
 
 FloatArray = npt.NDArray[np.float64]
 
-#: Gait periods per segment of a run (the unit of the observables and of the profile's terms).
+#: Compared gait periods per segment of a run (the unit of the observables and of the bootstrap).
 SEGMENT_PERIODS = 2
 #: The scale of each observable's gap in the distance (its unit: BL / period, rad / period, BL, rad, N). FSR's is
 #: wide: a contact is there or not, and a pose a fraction of a millimetre off switches a period's peak.
@@ -442,7 +442,7 @@ def _simulate_job(job: tuple[BagRun, SimConfig, str]) -> dict[str, FloatArray]:
 
 @dataclass(frozen=True)
 class FitResult:
-    """Fitted values, their 95 % profile intervals, the distance at the defaults and at the fit, and the gaps."""
+    """Fitted values, their 95 % bootstrap intervals, the distance at the defaults and at the fit, and the gaps."""
 
     names: tuple[str, ...]
     values: tuple[float, ...]
