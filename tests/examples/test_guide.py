@@ -34,7 +34,7 @@ def test_the_guides_launch_command_resolves_to_the_example_controller() -> None:
     words = shlex.split(command.replace('\\\n', ' '))
     assert words[1:3] == ['smarticle_bringup', 'sim.launch.xml']
     plan = resolve(LAUNCH / 'sim.launch.xml', parse_arguments(words[3:]))
-    assert [n.executable for n in plan.nodes] == ['smarticle-compose', 'square_stop', 'square_stop']
+    assert [n.executable for n in plan.nodes] == ['smarticle-compose', 'glider_monitor', 'square_stop', 'square_stop']
 
 
 def test_every_argument_of_the_table_is_declared_by_the_launch_files() -> None:
