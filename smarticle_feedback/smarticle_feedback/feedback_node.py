@@ -16,6 +16,7 @@ from rclpy.node import Node
 from rclpy.time import Time
 from smarticle_common import topics
 from smarticle_common.gait import board_time
+from smarticle_common.launching import summary_line
 from smarticle_common.messages import stamp_ns
 from smarticle_common.node import (OK, WARN, DiagnosticsPublisher, accept_runtime_changes, read_config,
                                    resolve_robot_id, run_node)
@@ -114,6 +115,13 @@ class FeedbackNode(Node):
             decided.frame_id = decided_face
             self._last_decision = decided
             self.decision_pub.publish(decided)
+
+    def destroy_node(self) -> None:
+        """Log the robot's summary line (for the launcher: halts decided, FSR samples inside an impact window),
+        then destroy the node."""
+        c = self.controller.counters
+        self.get_logger().info(summary_line(self.robot_id, {'halts': c.halts, 'impact samples': sum(c.in_window)}))
+        super().destroy_node()
 
     def report(self, kind: str, problem: str) -> None:
         """Count a bad message and log it (throttled)."""

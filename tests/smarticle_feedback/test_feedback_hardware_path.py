@@ -3,6 +3,9 @@ next gait period (servo_bridge, gait and feedback as separate processes; behavio
 
 from __future__ import annotations
 
+import os
+import re
+import signal
 import time
 from pathlib import Path
 from typing import Any
@@ -65,7 +68,8 @@ def test_impact_windows_change_at_once_and_bad_changes_are_refused(nodes: Any, r
 
     from tests.helpers.params import get_parameter, set_parameter
 
-    nodes.start('feedback', '--ros-args', '-r', '__ns:=/smarticle_5', '-p', 'start_at:=0.0', '-p', 'period:=1.0')
+    feedback = nodes.start('feedback', '--ros-args', '-r', '__ns:=/smarticle_5', '-p', 'start_at:=0.0',
+                           '-p', 'period:=1.0')
     probe = ros_node('feedback_params_probe')
     halts: list[Any] = []
     probe.create_subscription(Header, topics.topic('halt', 5), halts.append, topics.qos_profile(topics.Qos.COMMAND))
@@ -94,6 +98,9 @@ def test_impact_windows_change_at_once_and_bad_changes_are_refused(nodes: Any, r
     assert press(13.0, 9.0) == 3
     assert set_parameter(probe, target, 'arm1_front_enabled', False) == (True, '')
     assert press(14.0, 9.0) == 3
+    os.killpg(feedback.pid, signal.SIGINT)                 # its exit summary, for the launcher's line per robot
+    assert feedback.wait(timeout=10) == 0
+    assert re.search(r'summary: robot 5: halts 3, impact samples \d+', nodes.output(feedback)), nodes.output(feedback)
 
 
 def test_a_recorded_c2_force_trace_halts_the_hardware_path_at_the_batch_periods(nodes: Any, ros_node: Any,
