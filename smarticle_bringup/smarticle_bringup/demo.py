@@ -395,7 +395,8 @@ def run_stack(part: Part, args: argparse.Namespace, folder: Path) -> StackRun:
         expected_nodes = n * (2 if part.feedback else 1) + 4 + (1 if args.view else 0)
         while driver.proc.poll() is None:
             rclpy.spin_once(node, timeout_sec=0.05)
-            if samples and len(graph) < expected_nodes:     # keep the fullest view of the graph
+            if len(graph) < expected_nodes:     # the fullest view of the graph, from the start (a short run on a
+                # loaded machine can end before discovery has shown every node that was up while it waited)
                 now_seen = [f'{ns.rstrip("/")}/{name}' for name, ns in node.get_node_names_and_namespaces()]
                 graph = now_seen if len(now_seen) > len(graph) else graph
             if time.monotonic() - last > 5.0 and samples:
@@ -406,6 +407,11 @@ def run_stack(part: Part, args: argparse.Namespace, folder: Path) -> StackRun:
         for _ in range(20):
             rclpy.spin_once(node, timeout_sec=0.02)
         wall = time.monotonic() - wall0
+        deadline = time.monotonic() + 2.0   # the monitor and the recorder outlive the bridge until launch.stop()
+        while len(graph) < expected_nodes and time.monotonic() < deadline:
+            rclpy.spin_once(node, timeout_sec=0.05)
+            now_seen = [f'{ns.rstrip("/")}/{name}' for name, ns in node.get_node_names_and_namespaces()]
+            graph = now_seen if len(now_seen) > len(graph) else graph + [n for n in now_seen if n not in graph]
         trouble = ''
         code = driver.proc.returncode
         if code == SIM_TROUBLE_EXIT:   # the physics stopped: keep what arrived, say why

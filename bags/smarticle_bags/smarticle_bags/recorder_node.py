@@ -48,12 +48,13 @@ class RecorderNode(Node):
         self._created = time.monotonic()
         self._warned_missing = False
         self._warned_clock = False
+        self._clock_sub: Any = None
         if self.sim_clock is not None:
             # created first, so that a tick's /clock is taken before its messages; as deep as the recorded
             # topics' queues (not keep-last 1), so that a burst of ticks keeps every time, the first one too
             clock_spec = contract.spec_of('clock')
-            self.create_subscription(contract.message_class(clock_spec.type), clock_spec.name, self.on_clock,
-                                     qos.subscription_profile([]))
+            self._clock_sub = self.create_subscription(contract.message_class(clock_spec.type), clock_spec.name,
+                                                       self.on_clock, qos.subscription_profile([]))
         steady = Clock(clock_type=ClockType.STEADY_TIME)   # not sim time: it does not run before the sim
         self.create_timer(self.config.polling_interval, self.on_scan, clock=steady)
         self.create_timer(self.config.flush_interval, self.on_flush, clock=steady)
@@ -64,6 +65,11 @@ class RecorderNode(Node):
     def on_scan(self) -> None:
         """Subscribe to chosen topics that appeared since the last scan; warn about missing named ones."""
         chosen = self.config.filter.choose(self.get_topic_names_and_types())
+        if self._clock_sub is not None and self._clock_sub.get_publisher_count() == 0:
+            # use_sim_time: no topic before /clock has matched its publisher, so that a sim waiting for this
+            # recorder's subscription (sim.launch.xml) starts only once the recorder takes its first /clock;
+            # else the ticks before the match would be written at a later tick's time
+            chosen = {}
         for name, type_name in chosen.items():
             # a topic seen only through its subscribers waits for a publisher: its QoS (latched,
             # reliable) is not known before, and a latched message would be missed
