@@ -370,6 +370,10 @@ def test_the_lifecycle_walks_every_transition(nodes: Any, ros_node: Any, tmp_pat
         spin_until(node, lambda: False, 0.3)
         before = len(emulator.targets())
         assert lifecycle(node, target, Transition.TRANSITION_DEACTIVATE) == (True, 'inactive')
+        # the bridge wrote the hold before answering; the emulator's reader takes it from the pseudo-terminal
+        # a little later on a loaded machine
+        spin_until(node, lambda: len(emulator.targets()) > before, 5.0)
+        spin_until(node, lambda: False, 0.2)          # anything else the deactivation sent
         hold = emulator.targets()[before:]
         assert [r.channel for r in hold] == [0], hold   # arm 1 held where it was
         servos = load_servo_calibration(CONFIG / 'servo_calibration.yaml')
