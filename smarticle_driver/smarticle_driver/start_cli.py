@@ -6,8 +6,8 @@ simulation. A zero stamp (the default) means "now", each node's own clock when t
 ``--in 2`` stamps this machine's wall clock plus 2 s (boards on one clock, e.g. NTP, then start their
 periods together); ``--at T`` stamps T. The command waits until the nodes listen (``--wait`` matching
 subscriptions, within ``--timeout`` seconds, then until no new one has come for a second), publishes, waits
-until they have the message, then stays a second for nodes still being discovered. The same as ``ros2 topic pub --once /smarticles/start
-std_msgs/msg/Header "{}" --qos-durability transient_local``.
+until they have the message, then stays a second for nodes still being discovered. The same as
+``ros2 topic pub --once /smarticles/start std_msgs/msg/Header "{}" --qos-durability transient_local``.
 """
 
 from __future__ import annotations
