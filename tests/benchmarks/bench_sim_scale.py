@@ -14,7 +14,7 @@ machine), and fits cost ~ N^b (least squares on log time-per-step against log N)
 
 Part 2, P1: 7 robots dense (seed 1), 300 periods (``--quick``: 30), batch core with the CLI defaults
 against the raw loop of the same scene in the same run (``--previous``: also both at the previous default,
-1/960 s with 5 solver iterations and roll / pitch inertia x100). Target (issue #11): >= 10x real time on one
+1/960 s with 5 solver iterations and roll / pitch inertia x100). Target: >= 10x real time on one
 core at the default step.
 
 Writes ``out/benchmarks/sim_scale.csv``, ``sim_scale_p1.csv`` and ``sim_scale.png``.
@@ -213,7 +213,7 @@ def main(argv: list[str] | None = None) -> int:
         batch = p1[2]
         rtf, gap = float(batch['real_time_factor']), float(batch['vs_raw'])
         overhead = float(batch['overhead_outside_physics'])
-        print(f'target (issue #11): a P1 trial at >= 10x real time on one core at the default: '
+        print(f'target: a P1 trial at >= 10x real time on one core at the default: '
               f'{"met" if rtf >= 10 else "NOT met"} ({rtf:.1f}x; {gap:+.1%} against the bare loop at the same step, '
               f'{overhead:+.1%} against its own stepSimulation time)')
         write_csv(out_path('sim_scale_p1.csv', args.out_dir), p1)
