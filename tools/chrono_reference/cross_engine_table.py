@@ -6,8 +6,10 @@ Reads what the runs wrote and runs nothing:
   * the lone robot's trials of the specs ``single_chrono``, ``single_bullet_40`` and ``single_mujoco_40``
     (their result stores).
 
-A run at a step other than its engine's default (Bullet 1/960 s, Chrono 1e-4 s, MuJoCo 1/9600 s) is a column
-of its own, labelled with its step ('bullet 1/3840 s'); Bullet at 1/3840 and 1/7680 s gets verdicts against
+A run with the authors' published masses is a column of its own (``chrono, authors' masses``), set against the
+same engine's default masses and against Chrono's authors' masses. A run at a step other than its engine's
+default (Bullet 1/960 s, Chrono 1e-4 s, MuJoCo 1/9600 s) is a column of its own, labelled with its step
+('bullet 1/3840 s'); Bullet at 1/3840 and 1/7680 s gets verdicts against
 Bullet at 1/960 s and Chrono, and a convergence verdict (the gliding share agrees by Fisher's test at both finer
 steps and the gliders' mean speed is within 25 % of 1/960 s's).
 
@@ -54,8 +56,14 @@ DEFAULT_STEPS = {'bullet': 1.0 / 960.0, 'chrono': 1e-4, 'mujoco': 1.0 / 9600.0}
 FINE_BULLET = (3840, 7680)
 CONVERGED_SPEED = 0.25
 #: The engine pairs a verdict is given for (where both ran).
+#: A run with the authors' published masses (``reference_check.py --mass-model authors``) is a column of its own,
+#: its engine's label with this suffix ('chrono, authors' masses'): it is set against the same engine with the
+#: default masses and against Chrono with the authors' masses.
+AUTHORS = ", authors' masses"
 VERSUS = (('bullet', 'chrono'), ('mujoco', 'chrono'), ('bullet', 'mujoco'),
-          *((f'bullet 1/{n} s', 'bullet') for n in FINE_BULLET), *((f'bullet 1/{n} s', 'chrono') for n in FINE_BULLET))
+          *((f'bullet 1/{n} s', 'bullet') for n in FINE_BULLET), *((f'bullet 1/{n} s', 'chrono') for n in FINE_BULLET),
+          *((e + AUTHORS, e) for e in ENGINES), ('bullet' + AUTHORS, 'chrono' + AUTHORS),
+          ('mujoco' + AUTHORS, 'chrono' + AUTHORS), ('bullet' + AUTHORS, 'mujoco' + AUTHORS))
 
 
 def record_missing(out: Path, starts: Iterable[tuple[int, Any]], engines: Sequence[str],
@@ -98,7 +106,8 @@ def label(engine: str, step: float) -> str:
 def present(rows: dict[tuple[str, float], list[dict[str, Any]]]) -> list[str]:
     """The engine labels of ``rows``: the default steps first (bullet, chrono, mujoco), then the others."""
     names = {k[0] for k in rows}
-    return [e for e in ENGINES if e in names] + sorted(names - set(ENGINES))
+    first = [e for e in ENGINES if e in names] + [e + AUTHORS for e in ENGINES if e + AUTHORS in names]
+    return first + sorted(names - set(first))
 
 
 def wilson(k: int, n: int) -> tuple[float, float, float]:
@@ -151,7 +160,7 @@ def ring_rows(paths: Sequence[Path]) -> dict[tuple[str, float], list[dict[str, A
         data = json.loads(path.read_text())
         theta = float(data['args']['theta'])
         for row in data['rows']:
-            name = label(row['engine'], float(row['step']))
+            name = label(row['engine'], float(row['step'])) + (AUTHORS if row.get('mass_model') == 'authors' else '')
             if (name, float(row['phase2']), theta) in seen:
                 continue
             seen.add((name, float(row['phase2']), theta))

@@ -43,7 +43,9 @@ COLUMNS = ('engine', 'step', 'phase2', 'seed', 'r_end_bl', 'phi_end_deg', 'trave
 
 def run_one(engine: str, step: float, phase2: float, seed: int, args: argparse.Namespace) -> dict[str, Any]:
     """One pair run in ``engine`` ('chrono', 'bullet' or 'mujoco') at ``step`` s; its figures."""
-    config = build_config(physics=None if engine in ('chrono', 'mujoco') else {'time_step': step})
+    config = build_config(physics=None if engine in ('chrono', 'mujoco') else {'time_step': step},
+                          diagnostics={'mass_model': args.mass_model} if args.mass_model != 'uniform' else None,
+                          engine=engine)
     gait = GaitConfig.from_degrees(args.alpha_max, servo_speed=config.robot.servo_speed)
     scene = pair_scene(config.robot, gait, args.r, math.radians(args.theta), math.radians(args.phi),
                        (0.0, phase2), seed=seed)
@@ -64,7 +66,8 @@ def run_one(engine: str, step: float, phase2: float, seed: int, args: argparse.N
     figures = pair_figures(rec, gait.period, config.physics.control_tick * args.sample_every, R_BIND_BL, 10)
     if engine != 'chrono':
         figures['wall_time_s'] = None
-    return {'engine': engine, 'step': step, 'phase2': phase2, 'seed': seed, **figures}
+    return {'engine': engine, 'step': step, 'phase2': phase2, 'seed': seed, 'mass_model': args.mass_model,
+            **figures}
 
 
 def cell(value: Any) -> str:
@@ -89,6 +92,9 @@ def main() -> int:
     parser.add_argument('--bullet-steps', type=int, nargs='+', default=[960, 9600],
                         help='Bullet steps as steps per second')
     parser.add_argument('--contact', choices=('smc', 'nsc'), default='smc', help="Chrono's contact")
+    parser.add_argument('--mass-model', choices=('uniform', 'authors'), default='uniform',
+                        help="the robots' masses in every engine: uniform (the default robot) or the authors' "
+                             "published, lopsided arms (Diagnostics.mass_model)")
     parser.add_argument('--hold-first', action='store_true', help="hold robot 1's body in place (Chrono)")
     parser.add_argument('--seeds', type=seeds_argument, default=[0], help='scene seeds (7, 0..3, 0,3)')
     parser.add_argument('--out', type=Path, help='also write the rows as JSON here')
