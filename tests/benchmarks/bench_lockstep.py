@@ -69,16 +69,17 @@ class EveryNth:
         self.ticks += 1
 
 
-def batch_rtf(robots: int, duration: float, feedback: bool) -> tuple[float, float, str]:
+def batch_rtf(robots: int, duration: float, feedback: bool, preset: str = 'small') -> tuple[float, float, str]:
     """x real time of the batch core (Runner + gait cores [+ impact controllers, sampling at the bridge's
-    publish period]) on the stack's scene: (per wall second, per CPU second, final poses digest)."""
+    publish period]) on the stack's scene with the sim bridge's ``preset`` (a name or a preset file): (per wall
+    second, per CPU second, final poses digest)."""
     from smarticle_experiments.p6 import default_feedback_config
     from smarticle_feedback.controller import ImpactController
     from smarticle_sim.bridge import BridgeSettings, poses_digest
     from smarticle_sim.physics import Physics
     from smarticle_sim.runner import FeedbackController, GaitController, Runner
 
-    settings = BridgeSettings.defaults(robots=robots, scene='dense', seed=1)
+    settings = BridgeSettings.defaults(robots=robots, scene='dense', seed=1, preset=preset)
     scene = settings.scene()
     physics = Physics(settings.sim, scene)
     gaits = GaitController(physics, [r.gait for r in scene.robots])

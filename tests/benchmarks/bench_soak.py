@@ -1,6 +1,8 @@
 """A soak run of the composed lock-step stack: memory over time, nothing lost, an intact bag, the batch core's poses.
 
-``sim.launch.xml`` with 7 robots (dense, seed 1, the shipped stack.yaml), feedback, the glider monitor and the
+``sim.launch.xml`` with 7 robots (dense, seed 1, the shipped stack.yaml with the sim bridge's ``preset`` a preset
+file of the small robot on a ``--plate-size`` plate: over an hour gliders travel metres and would leave the
+shipped 0.6 m plate, a physical end of the run), feedback, the glider monitor and the
 recorder (``record:=true``: /smarticles/poses, /clock, /smarticles/start, /smarticles/gliders,
 /smarticles/markers, in sim time), composed (``smarticle-compose`` on the EventsExecutor, the recorder as its
 own process), for ``--duration`` sim seconds (default one hour). Meanwhile the resident memory (RSS) of every
@@ -16,7 +18,7 @@ process of the launch is sampled every ``--sample`` wall seconds. At the end it 
 
 Exit code 0 when every check holds, 1 otherwise. ``tests/smarticle_bringup/test_soak.py`` runs a two-minute
 version. Usage: ``python tests/benchmarks/bench_soak.py [--duration 3600] [--robots 7] [--sample 5]
-[--out DIR]`` (the bag and logs go to DIR, default a temporary folder).
+[--plate-size 12] [--out DIR]`` (the bag and logs go to DIR, default a temporary folder).
 """
 
 from __future__ import annotations
@@ -131,8 +133,24 @@ def bag_counts(bag: Path) -> dict[str, int]:
     return {name: info.message_count for name, info in BagReader(bag).topics.items()}
 
 
-def soak(duration: float, robots: int, sample: float, out: Path) -> SoakResult:
-    """Run the soak in ``out`` (bag, logs); return what it measured."""
+def stack_params(out: Path, plate_size: float) -> Path:
+    """The shipped stack.yaml with the sim bridge's ``preset`` a preset file of the small robot on a
+    ``plate_size`` m plate (both written to ``out``); the path of the params file."""
+    import yaml
+
+    from smarticle_bringup.launch_files import package_share
+
+    preset = out / 'soak_preset.yaml'
+    preset.write_text(yaml.safe_dump({'preset': 'small', 'physics': {'plate_size': plate_size}, 'robot': {}}))
+    params = yaml.safe_load((package_share('smarticle_bringup') / 'config' / 'stack.yaml').read_text())
+    params['/sim_bridge'] = {'ros__parameters': {'preset': str(preset)}}
+    path = out / 'soak_stack.yaml'
+    path.write_text(yaml.safe_dump(params))
+    return path
+
+
+def soak(duration: float, robots: int, sample: float, out: Path, plate_size: float = 0.6) -> SoakResult:
+    """Run the soak in ``out`` (bag, logs) on a ``plate_size`` m plate; return what it measured."""
     import psutil
 
     from tests.benchmarks.bench_lockstep import batch_rtf
@@ -140,7 +158,8 @@ def soak(duration: float, robots: int, sample: float, out: Path) -> SoakResult:
     result = SoakResult(duration)
     bag, logs = out / 'bag', out / 'logs'
     command = [executable('smarticle-launch'), 'smarticle_bringup', 'sim.launch.xml', f'robots:={robots}',
-               f'duration:={duration!r}', 'feedback:=true', 'record:=true', f'bag:={bag}', '--log-dir', str(logs)]
+               f'duration:={duration!r}', 'feedback:=true', 'record:=true', f'bag:={bag}',
+               f'params_file:={stack_params(out, plate_size)}', '--log-dir', str(logs)]
     domain = DomainReservation()
     try:
         started = time.monotonic()
@@ -174,7 +193,7 @@ def soak(duration: float, robots: int, sample: float, out: Path) -> SoakResult:
     result.bag_ok = check.returncode == 0
     said = (check.stdout + check.stderr).strip().splitlines()
     result.bag_check = said[-1] if said else f'exit {check.returncode}'
-    result.batch_digest = batch_rtf(robots, duration, True)[2]
+    result.batch_digest = batch_rtf(robots, duration, True, str(out / 'soak_preset.yaml'))[2]
     return result
 
 
@@ -212,19 +231,21 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--duration', type=float, default=3600.0, help='sim seconds (default one hour)')
     parser.add_argument('--robots', type=int, default=7)
     parser.add_argument('--sample', type=float, default=5.0, help='wall seconds between RSS samples')
+    parser.add_argument('--plate-size', type=float, default=12.0,
+                        help='side of the square plate (m; default 12: an hour of gliding stays on it)')
     parser.add_argument('--out', type=Path, default=None, help='folder for the bag and the logs (kept)')
     args = parser.parse_args(argv)
-    if args.duration <= 0 or args.robots < 2 or args.sample <= 0:
-        parser.error('--duration and --sample must be positive, --robots at least 2')
+    if args.duration <= 0 or args.robots < 2 or args.sample <= 0 or args.plate_size <= 0:
+        parser.error('--duration, --sample and --plate-size must be positive, --robots at least 2')
     print(f'# soak: composed lock-step stack, {args.robots} robots, feedback, monitor, recorder, {args.duration:g} '
-          f'sim s; {machine_line()}', flush=True)
+          f'sim s, {args.plate_size:g} m plate; {machine_line()}', flush=True)
     if args.out is not None:
         args.out.mkdir(parents=True, exist_ok=True)
-        result = soak(args.duration, args.robots, args.sample, args.out)
+        result = soak(args.duration, args.robots, args.sample, args.out, args.plate_size)
         rows = report(result)
     else:
         with tempfile.TemporaryDirectory(prefix='bench_soak_') as work:
-            result = soak(args.duration, args.robots, args.sample, Path(work))
+            result = soak(args.duration, args.robots, args.sample, Path(work), args.plate_size)
             rows = report(result)
     print(f'CSV: {write_csv(out_path("soak_rss.csv"), rows)}')
     return 0 if result.ok else 1
