@@ -4,6 +4,7 @@
     smarticle-sim run --scene pair --r 1.3 --theta 90 --phi 180 --phase 0 0.25 --periods 75 --out pair.npz
     smarticle-sim bench --robots 7 --periods 10 [--cpu-time]
     smarticle-sim run --noise paper --seed 1 --periods 100 --out noisy.npz
+    smarticle-sim run --preset out/calibration/preset.yaml --scene pair --periods 20 --out lab_pair.npz
     smarticle-sim phase-drift --robots 7 --periods 100 --seed 1
 """
 
@@ -23,11 +24,11 @@ from smarticle_common.runs import save_npz
 from .batch import plot_trajectories, run_trial
 from .drift import format_phase_drift, phase_drift
 from .benchmark import benchmark, format_table
-from .errors import SimError
+from .errors import ConfigError, SimError
 from .scenes import Scene, build_scene
 from smarticle_common.facts import GAIT_PERIOD, PRESETS
 
-from .config_builder import build_config
+from .config_builder import build_config, is_preset_file
 from .settings import NoiseConfig, SimConfig
 from smarticle_common.cli import add_version, closed_pipe_safe
 
@@ -49,7 +50,10 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument('--alpha-max', type=float, default=90.0, help='gait amplitude (degrees)')
         p.add_argument('--period', type=float, default=GAIT_PERIOD, help='gait period (s)')
         p.add_argument('--seed', type=int, default=1, help='seed of the scene builder')
-        p.add_argument('--preset', choices=sorted(PRESETS), default='small', help='robot preset')
+        p.add_argument('--preset', default='small', metavar='NAME|FILE',
+                       help=f'robot preset name ({", ".join(sorted(PRESETS))}) or a preset file (.yaml, e.g. '
+                            "smarticle-calibrate's preset.yaml: a base preset and its physics and robot values; "
+                            'default: small)')
         p.add_argument('--time-step', type=float, default=None, help='physics time step (s)')
         p.add_argument('--control-tick', type=float, default=None, help='control tick (s), whole steps')
         p.add_argument('--solver-iterations', type=int, default=None)
@@ -94,6 +98,9 @@ def config_from_args(args: argparse.Namespace) -> SimConfig:
     given = (('time_step', args.time_step), ('control_tick', args.control_tick),
              ('solver_iterations', args.solver_iterations))
     physics = {name: value for name, value in given if value is not None}
+    if not is_preset_file(args.preset) and args.preset not in PRESETS:
+        raise ConfigError(f'--preset {args.preset!r} is no robot preset ({", ".join(sorted(PRESETS))}) and no '
+                          'preset file (a .yaml or .yml path)')
     return build_config(args.preset, physics, noise=noise_from_args(args))
 
 

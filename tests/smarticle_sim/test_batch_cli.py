@@ -61,3 +61,28 @@ def test_recording_round_trip(tmp_path: Path) -> None:
     for name in ('time', 'poses', 'arm_angles', 'fsr', 'contacts'):
         assert np.array_equal(getattr(rec, name), getattr(back, name))
     assert back.meta == json.loads(json.dumps(rec.meta))
+
+
+def test_cli_runs_a_preset_file_and_refuses_a_bad_one(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """``--preset FILE`` (the format smarticle-calibrate writes): the run's config holds the file's values."""
+    preset = tmp_path / 'lab.yaml'
+    preset.write_text('preset: small\nphysics: {friction_body_plate: 0.42, restitution: 0.5}\n'
+                      'robot: {servo_speed: 9.5}\ncalibration: {bags: [lab_pair]}\n', encoding='utf-8')
+    out = tmp_path / 'lab.npz'
+    assert main(['run', '--preset', str(preset), '--scene', 'pair', '--r', '1.6', '--theta', '0', '--periods', '1',
+                 '--out', str(out), '--no-progress']) == 0
+    meta = load_npz(out).meta
+    assert meta['physics']['friction_body_plate'] == 0.42 and meta['physics']['restitution'] == 0.5
+    assert meta['robot']['servo_speed'] == 9.5 and meta['robot']['name'] == 'small'
+    capsys.readouterr()
+
+    bad = tmp_path / 'bad.yaml'
+    bad.write_text('physics: {friction_plate: 0.3}\n', encoding='utf-8')
+    for preset_arg, words in ((str(bad), ('bad.yaml', 'friction_plate')),
+                              (str(tmp_path / 'missing.yaml'), ('missing.yaml', 'cannot be read')),
+                              ('tiny', ("'tiny'", 'feedback, small', 'preset file'))):
+        assert main(['run', '--preset', preset_arg, '--periods', '1', '--out', str(tmp_path / 'x.npz'),
+                     '--no-progress']) == 2
+        err = capsys.readouterr().err
+        assert err.count('\n') == 1 and all(word in err for word in words), err
+    assert not (tmp_path / 'x.npz').exists()
