@@ -30,6 +30,21 @@ construction), so ``D`` is a function of the parameters alone. Each fitted value
 bootstrap over the runs' segments: each resample of the segments picks, among the parameter values the
 search evaluated, the one with the least distance over it; the interval holds the middle 95 % of the picks
 (``fit``). Trials run on Dask (``smarticle_experiments.engine.dask_client``) when asked.
+
+Binding and lifetimes are compared over the whole run, not per segment (a segment of ``SEGMENT_PERIODS``
+periods cannot show a bound pair's life), and are reported but not part of ``D``: a free-running chaotic sim
+of a dense run diverges from the bag within a few periods, so which pair is bound when is no match to fit,
+only the run's statistics are. For each run of two or more robots the sim runs once from the bag's poses at
+the first period that sees every robot (``scene_of``, each robot's measured clock rate) to the run's end
+(``simulate_whole``); in the bag's strobe and the sim's alike, a pair is bound in period q if its centre
+distance at the period's strobe (its first pose, start + q T) is under the bind radius (``R_BIND_BL`` body
+lengths of the preset's robot, ``smarticle_tracking.gliders.frame_hits``: the project's one bound rule, an
+unseen robot binds nothing). ``binding_stats`` gives:
+
+* ``bound share``: the bound pair-periods over all pair-periods of the runs (a fraction);
+* ``lifetime``: the mean length (periods) of the bound runs, maximal stretches of consecutive bound periods
+  (``smarticle_tracking.gliders.bound_runs``); a run still bound at the end of the data is counted as long as
+  it was seen (censored), NaN if no pair was ever bound.
 """
 
 from __future__ import annotations
@@ -44,7 +59,7 @@ import numpy as np
 import numpy.typing as npt
 from scipy import optimize
 
-from smarticle_common.facts import GAIT_PERIOD, PRESETS, RobotSpec
+from smarticle_common.facts import GAIT_PERIOD, PRESETS, R_BIND_BL, RobotSpec
 from smarticle_common.gait import GaitConfig
 from smarticle_sim.config_builder import build_config, is_preset_file, read_preset_file
 from smarticle_sim.errors import ConfigError
@@ -61,6 +76,8 @@ SEGMENT_PERIODS = 2
 SCALES: dict[str, float] = {'speed': 0.002, 'turn': 0.01, 'r': 0.05, 'phi': 0.1, 'fsr': 0.5}
 #: Units of the observables, for the report.
 UNITS: dict[str, str] = {'speed': 'BL/period', 'turn': 'rad/period', 'r': 'BL', 'phi': 'rad', 'fsr': 'N'}
+#: The whole-run binding observables (reported, not in the distance) and their units.
+BINDING_UNITS: dict[str, str] = {'bound share': 'fraction', 'lifetime': 'periods'}
 
 
 class BagFitError(ExperimentError, ValueError):
@@ -352,6 +369,70 @@ def simulate(run: BagRun, config: SimConfig, engine: str = 'bullet') -> dict[str
     return _segment_observables(a, b, np.array(peaks).reshape(-1, n) if want_fsr else None, config.robot.body_length)
 
 
+def first_seen(run: BagRun) -> int:
+    """The first period whose strobe sees every robot (where a whole-run sim starts)."""
+    seen = np.all(np.isfinite(run.strobe[:run.periods, :, :3]), axis=(1, 2))
+    if not np.any(seen):
+        raise BagFitError(f'{run.name}: no period start sees every robot')
+    return int(np.argmax(seen))
+
+
+def simulate_whole(run: BagRun, config: SimConfig, engine: str = 'bullet') -> FloatArray:
+    """The sim's strobe of the whole run: one run from the bag's poses at ``first_seen`` to the run's end, each
+    robot at its measured clock rate; (periods + 1, n, 3) poses at start + q T like ``BagRun.strobe`` (NaN
+    before the sim's start and after a trouble stop)."""
+    from smarticle_sim.batch import run_trial
+    from smarticle_sim.engines import engine_factory
+
+    rates = run.rates
+
+    def clocks(_physics: Any, gaits: Any) -> list[Any]:
+        gaits.clock_rates = tuple(float(r) for r in rates)   # each robot's measured gait clock
+        return []
+
+    at = first_seen(run)
+    rec = run_trial(config, scene_of(run, config, at), float(run.periods - at), controllers=clocks,
+                    engine=engine_factory(engine))
+    out = np.full_like(run.strobe, np.nan)
+    out[at:] = _strobe(np.asarray(rec.time), np.asarray(rec.poses), run.period * np.arange(run.periods - at + 1))
+    return out
+
+
+def bound_table(strobe: FloatArray, r_bind: float) -> npt.NDArray[np.bool_]:
+    """(periods, pairs) whether each pair is bound in each period: its centre distance at the period's strobe
+    (``strobe`` (periods, n, 3), m) under ``r_bind`` (m), by the one bound rule
+    (``smarticle_tracking.gliders.frame_hits``; an unseen robot binds nothing)."""
+    from smarticle_common.pairs import pair_coordinates
+    from smarticle_tracking.gliders import frame_hits
+
+    return frame_hits(pair_coordinates(strobe).r, r_bind)
+
+
+def binding_stats(tables: Sequence[npt.NDArray[np.bool_]]) -> dict[str, float]:
+    """``bound share`` (bound pair-periods over all pair-periods) and ``lifetime`` (mean length in periods of
+    the maximal runs of bound periods, censored runs counted as seen; NaN if none) of bound tables (periods,
+    pairs), pooled over runs."""
+    from smarticle_tracking.gliders import bound_runs
+
+    cells = sum(int(t.size) for t in tables)
+    bound = sum(int(np.count_nonzero(t)) for t in tables)
+    lengths = np.concatenate([np.asarray(r.stop - r.start, dtype=float)
+                              for r in (bound_runs(t) for t in tables)]) if tables else np.zeros(0)
+    return {'bound share': bound / cells if cells else math.nan,
+            'lifetime': float(np.mean(lengths)) if lengths.size else math.nan}
+
+
+def binding_runs(runs: Sequence[BagRun]) -> list[BagRun]:
+    """The runs whose binding is compared: those of two or more robots."""
+    return [run for run in runs if run.robots >= 2]
+
+
+def bag_binding(runs: Sequence[BagRun], r_bind: float) -> dict[str, float]:
+    """The bag's ``binding_stats`` over the runs of two or more robots, from ``first_seen`` to the last period."""
+    return binding_stats([bound_table(run.strobe[first_seen(run):run.periods], r_bind)
+                          for run in binding_runs(runs)])
+
+
 def residuals(sim: Mapping[str, FloatArray], bag: Mapping[str, FloatArray], flat: bool = True) -> dict[str, FloatArray]:
     """sim - bag per observable, over the segments both have (phi wrapped to [-pi, pi)); ``flat``: the finite
     values in one array, else (segments, components) with NaN where either side is unseen."""
@@ -425,6 +506,20 @@ class Problem:
     def distance(self, values: Sequence[float]) -> float:
         return distance(self.residuals(values))
 
+    def bind_radius(self) -> float:
+        """The bind radius (m): ``R_BIND_BL`` body lengths of the preset's robot, the same for bag and sim."""
+        return R_BIND_BL * build_config(self.preset).robot.body_length
+
+    def binding(self, values: Sequence[float]) -> dict[str, float]:
+        """The sim's whole-run ``binding_stats`` at the parameter values (one run per bag of two or more
+        robots, on the mapper); not part of the distance."""
+        runs = binding_runs(self.runs)
+        config = self.config(values)
+        strobes = (self.mapper or _map)(_whole_job, [(run, config, self.engine) for run in runs])
+        r_bind = self.bind_radius()
+        return binding_stats([bound_table(strobe[first_seen(run):run.periods], r_bind)
+                              for run, strobe in zip(runs, strobes, strict=True)])
+
     def defaults(self) -> list[float]:
         config = build_config(self.preset)
         return [float(getattr(config.physics if p.group == 'physics' else config.robot, p.name) or p.lo)
@@ -438,6 +533,11 @@ def _map(fn: Callable[[Any], Any], items: Sequence[Any]) -> list[Any]:
 def _simulate_job(job: tuple[BagRun, SimConfig, str]) -> dict[str, FloatArray]:
     run, config, engine = job
     return simulate(run, config, engine)
+
+
+def _whole_job(job: tuple[BagRun, SimConfig, str]) -> FloatArray:
+    run, config, engine = job
+    return simulate_whole(run, config, engine)
 
 
 @dataclass(frozen=True)
@@ -558,21 +658,57 @@ def format_gaps(title: str, before: Mapping[str, float], after: Mapping[str, flo
     return '\n'.join(lines)
 
 
-def draw_gaps(path: str | Path, before: Mapping[str, float], after: Mapping[str, float] | None = None) -> Path:
-    """A bar chart of each observable's gap normalised by its scale (default, fitted)."""
+def compare_binding(problem: Problem, fitted: Sequence[float] | None = None) -> dict[str, dict[str, float]]:
+    """The whole-run binding observables by column: ``bag``, ``default`` (the sim at the preset's values, as in
+    the gap table) and, given fitted values, ``fitted``; empty if no run has two or more robots."""
+    if not binding_runs(problem.runs):
+        return {}
+    out = {'bag': bag_binding(problem.runs, problem.bind_radius()), 'default': problem.binding(problem.defaults())}
+    if fitted is not None:
+        out['fitted'] = problem.binding(fitted)
+    return out
+
+
+def format_binding(title: str, columns: Mapping[str, Mapping[str, float]]) -> str:
+    """A table of the binding observables, one column per source (bag, default, fitted)."""
+    lines = [title, f'{"observable":<12} {"unit":<9}' + ''.join(f' {c:>10}' for c in columns)]
+    for name, unit in BINDING_UNITS.items():
+        lines.append(f'{name:<12} {unit:<9}' + ''.join(f' {col.get(name, math.nan):>10.4g}'
+                                                       for col in columns.values()))
+    return '\n'.join(lines)
+
+
+#: Bar colours of the report's columns: the gap panel's default and fitted, the bag in grey.
+_COLUMN_COLOURS = {'bag': 'C7', 'default': 'C0', 'fitted': 'C1'}
+
+
+def draw_gaps(path: str | Path, before: Mapping[str, float], after: Mapping[str, float] | None = None,
+              binding: Mapping[str, Mapping[str, float]] | None = None) -> Path:
+    """A bar chart of each observable's gap normalised by its scale (default, fitted) and, given ``binding``
+    (``compare_binding``), one panel per binding observable with a bar per column (bag, default, fitted)."""
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
 
     names = list(before)
     x = np.arange(len(names))
-    fig, ax = plt.subplots(figsize=(6, 3.2))
+    panels = 1 + (len(BINDING_UNITS) if binding else 0)
+    fig, axes = plt.subplots(1, panels, figsize=(6 + 2.6 * (panels - 1), 3.2), squeeze=False,
+                             gridspec_kw={'width_ratios': [max(len(names), 2)] + [1.5] * (panels - 1)})
+    ax = axes[0, 0]
     ax.bar(x - 0.2, [before[n] / SCALES[n] for n in names], 0.4, label='default')
     if after is not None:
         ax.bar(x + 0.2, [after.get(n, math.nan) / SCALES[n] for n in names], 0.4, label='fitted')
     ax.set_xticks(x, [f'{n}\n({UNITS[n]})' for n in names])
     ax.set_ylabel('gap / scale (RMS)')
     ax.legend()
+    if binding:
+        columns = list(binding)
+        for ax, (name, unit) in zip(axes[0, 1:], BINDING_UNITS.items(), strict=True):
+            ax.bar(np.arange(len(columns)), [binding[c].get(name, math.nan) for c in columns], 0.6,
+                   color=[_COLUMN_COLOURS.get(c, 'C2') for c in columns])
+            ax.set_xticks(np.arange(len(columns)), columns)
+            ax.set_title(f'{name} ({unit}), whole run', fontsize=9)
     fig.tight_layout()
     out = Path(path)
     fig.savefig(out, dpi=100)

@@ -3,11 +3,12 @@
     smarticle-calibrate BAG [BAG ...] --fit NAME[=LO:HI][,NAME...] [--preset NAME|FILE] [--out DIR] [--workers N]
 
 For each bag it rebuilds the run's scene (the first tracked poses after the gait start, the gait amplitude, each
-robot's clock rate and phase), simulates it and prints the gap per observable at the preset's values; with
-``--fit`` it fits the named parameters (``smarticle_experiments.calibrate``), prints the fitted values with
-their 95 % intervals and the gaps after the fit, draws both (DIR/gaps.png) and writes DIR/preset.yaml, which
-the sim bridge (its ``preset`` parameter), the demo (``--preset FILE``) and an experiment spec (``preset: FILE``)
-load.
+robot's clock rate and phase), simulates it and prints the gap per observable at the preset's values, and for
+runs of two or more robots the whole run's bound share and bound lifetime (bag and sim; reported, not fitted);
+with ``--fit`` it fits the named parameters (``smarticle_experiments.calibrate``), prints the fitted values with
+their 95 % intervals and the gaps and binding after the fit, draws both (DIR/gaps.png: the gaps, then a panel
+per binding observable) and writes DIR/preset.yaml, which the sim bridge (its ``preset`` parameter), the demo
+(``--preset FILE``), ``smarticle-sim --preset FILE`` and an experiment spec (``preset: FILE``) load.
 Bad input is one line on stderr and exit 2.
 """
 
@@ -58,6 +59,18 @@ def _fail(message: str) -> int:
     return 2
 
 
+def _print_binding(binding: dict[str, dict[str, float]]) -> None:
+    from smarticle_common.facts import R_BIND_BL
+
+    from . import calibrate as cal
+
+    if not binding:
+        print('binding: no run of two or more robots')
+        return
+    print(cal.format_binding(f'binding over whole runs (not in the distance; bound: r < {R_BIND_BL:g} BL at a '
+                             'period\'s strobe):', binding))
+
+
 def run(ns: argparse.Namespace) -> int:
     from smarticle_sim.config_builder import build_config
     from smarticle_sim.errors import ConfigError
@@ -101,9 +114,12 @@ def run(ns: argparse.Namespace) -> int:
             res = problem.residuals([])
             gaps = cal.gaps(res)
             print(cal.format_gaps(f'gap per observable at {ns.preset} (distance {cal.distance(res):.4g}):', gaps))
-            print(f'drawn: {cal.draw_gaps(ns.out / "gaps.png", gaps)}')
+            binding = cal.compare_binding(problem)
+            _print_binding(binding)
+            print(f'drawn: {cal.draw_gaps(ns.out / "gaps.png", gaps, binding=binding)}')
             return 0
         result = cal.fit(problem, ns.max_evaluations)
+        binding = cal.compare_binding(problem, result.values)
     except ConfigError as err:
         return _fail(str(err))
     finally:
@@ -116,8 +132,9 @@ def run(ns: argparse.Namespace) -> int:
     for name, value, (lo, hi) in zip(result.names, result.values, result.intervals, strict=True):
         print(f'  {name} = {value:.4g} [{lo:.4g}, {hi:.4g}]')
     print(f'evaluations: {result.evaluations}')
+    _print_binding(binding)
     preset = cal.write_preset(ns.out / 'preset.yaml', ns.preset, params, result, [str(b) for b in ns.bags])
-    print(f'drawn: {cal.draw_gaps(ns.out / "gaps.png", result.gaps_default, result.gaps_fit)}')
+    print(f'drawn: {cal.draw_gaps(ns.out / "gaps.png", result.gaps_default, result.gaps_fit, binding)}')
     print(f'preset file: {preset}')
     return 0
 

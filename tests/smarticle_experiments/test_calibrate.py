@@ -15,7 +15,7 @@ from smarticle_experiments.calibrate_cli import main
 from smarticle_sim.batch import run_trial
 from smarticle_sim.config_builder import build_config
 from smarticle_sim.errors import ConfigError
-from smarticle_sim.scenes import pair_scene
+from smarticle_sim.scenes import dense_scene, pair_scene
 
 
 def _preset_file(tmp_path: Path, friction: float = 0.42) -> Path:
@@ -93,6 +93,90 @@ def test_the_cli_recovers_a_friction_inside_its_interval(tmp_path: Path, capsys:
     assert abs(fitted['value'] - 0.45) < 0.02
     assert data['physics']['friction_body_plate'] == fitted['value']
     assert build_config(str(tmp_path / 'out' / 'preset.yaml')).physics.friction_body_plate == fitted['value']
+    assert (tmp_path / 'out' / 'gaps.png').stat().st_size > 0
+
+
+@pytest.mark.slow
+def test_two_parameters_from_two_groups_are_recovered_inside_their_intervals(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A plate friction (physics) and a servo speed (robot) fitted at once on a pair bag. The sim bag is rebuilt
+    exactly, so the truth is a sharp minimum of a rough distance (a pair in contact: off the minimum, D jumps
+    between segments' contact outcomes), which a local search finds only from near it: the bounds put the
+    truth on the 7-point grid, a step of 0.05 and 0.5 rad/s. Stated tolerances: half a grid step."""
+    truth = {'friction_body_plate': 0.45, 'servo_speed': 10.0}
+    tolerance = {'friction_body_plate': 0.025, 'servo_speed': 0.25}
+    config = build_config('small', physics={'friction_body_plate': truth['friction_body_plate']},
+                          robot={'servo_speed': truth['servo_speed']})
+    scene = pair_scene(config.robot, GaitConfig.from_degrees(90.0, servo_speed=truth['servo_speed']), 1.3, 0.0,
+                       math.pi)
+    rec = run_trial(config, scene, 6)
+    bag = cal.write_pose_bag(rec.time, rec.poses, tmp_path / 'pair', 'test pair')
+    with pytest.raises(SystemExit) as done:
+        main([str(bag), '--fit', 'friction_body_plate=0.3:0.6,servo_speed=8.5:11.5', '--max-evaluations', '20',
+              '--out', str(tmp_path / 'out')])
+    assert done.value.code == 0
+    assert 'servo_speed = ' in capsys.readouterr().out
+    data = yaml.safe_load((tmp_path / 'out' / 'preset.yaml').read_text())
+    for name, true in truth.items():
+        fitted = data['calibration']['fitted'][name]
+        lo, hi = fitted['interval_95']
+        assert abs(fitted['value'] - true) <= tolerance[name], (name, fitted)
+        assert lo <= true <= hi, (name, fitted)
+    written = build_config(str(tmp_path / 'out' / 'preset.yaml'))
+    assert written.physics.friction_body_plate == data['calibration']['fitted']['friction_body_plate']['value']
+    assert written.robot.servo_speed == data['calibration']['fitted']['servo_speed']['value']
+
+
+def test_bound_share_and_lifetime_of_known_strobes() -> None:
+    """Three robots, six periods, bind radius 0.0864 m: robot 1 at x1, robot 2 at y2 from robot 0 at the origin.
+    Bound tables (pairs 01, 02, 12): 110101, 001110 (unseen robot 2 in the last period binds nothing), 000100.
+    8 of 18 pair-periods bound; runs of 2, 1, 1 (censored at the end), 3 and 1 periods: mean 1.6."""
+    x1 = np.array([0.05, 0.05, 0.5, 0.05, 0.5, 0.05])
+    y2 = np.array([1.0, 1.0, 0.05, 0.05, 0.05, np.nan])
+    strobe = np.zeros((6, 3, 3))
+    strobe[:, 1, 0] = x1
+    strobe[:, 2, 1] = y2
+    strobe[5, 2, :] = np.nan
+    table = cal.bound_table(strobe, 1.6 * 0.054)
+    assert table.T.astype(int).tolist() == [[1, 1, 0, 1, 0, 1], [0, 0, 1, 1, 1, 0], [0, 0, 0, 1, 0, 0]]
+    stats = cal.binding_stats([table])
+    assert stats['bound share'] == pytest.approx(8 / 18) and stats['lifetime'] == pytest.approx(1.6)
+    apart = np.zeros((4, 2, 3))
+    apart[:, 1, 0] = 1.0
+    pooled = cal.binding_stats([table, cal.bound_table(apart, 1.6 * 0.054)])
+    assert pooled['bound share'] == pytest.approx(8 / 22) and pooled['lifetime'] == pytest.approx(1.6)
+    never = cal.binding_stats([cal.bound_table(apart, 1.6 * 0.054)])
+    assert never['bound share'] == 0.0 and math.isnan(never['lifetime'])
+    # at the radius is not under it
+    assert not cal.bound_table(apart, 1.0).any() and cal.bound_table(apart, 1.0 + 1e-9).all()
+
+
+def test_the_cli_prints_and_draws_the_whole_runs_binding(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Three robots of a dense start that bind and part within 12 periods: the bag's row is the rule applied to
+    the bag's strobe; the sim's whole run (one run from the bag's first poses) gives its own."""
+    config = build_config('small', physics={'friction_body_plate': 0.45})
+    rec = run_trial(config, dense_scene(config.robot, GaitConfig.from_degrees(90.0), 3, seed=1), 12)
+    bag = cal.write_pose_bag(rec.time, rec.poses, tmp_path / 'three', 'test three')
+    run = cal.load_run(bag)
+    expected = cal.binding_stats([cal.bound_table(run.strobe[:run.periods], 1.6 * config.robot.body_length)])
+    assert 0.0 < expected['bound share'] < 1.0
+    problem = cal.Problem([run], 'small', [])
+    assert cal.bag_binding([run], problem.bind_radius()) == expected
+    sim = problem.binding([])
+    strobe = cal.simulate_whole(run, build_config('small'))
+    assert np.array_equal(strobe[0], run.strobe[0] - [*np.nanmean(run.strobe[0, :, :2], axis=0), 0.0])
+    assert sim == cal.binding_stats([cal.bound_table(strobe[:run.periods], problem.bind_radius())])
+    with pytest.raises(SystemExit) as done:
+        main([str(bag), '--out', str(tmp_path / 'out')])
+    assert done.value.code == 0
+    lines = capsys.readouterr().out.splitlines()
+    title = next(k for k, line in enumerate(lines) if line.startswith('binding over whole runs'))
+    assert lines[title + 1].split() == ['observable', 'unit', 'bag', 'default']
+    for row, name in zip(lines[title + 2:title + 4], ('bound share', 'lifetime'), strict=True):
+        assert row.startswith(name)
+        bag_value, sim_value = (float(v) for v in row[len(name):].split()[1:])
+        assert bag_value == pytest.approx(expected[name], rel=1e-3)
+        assert sim_value == pytest.approx(sim[name], rel=1e-3)
     assert (tmp_path / 'out' / 'gaps.png').stat().st_size > 0
 
 
