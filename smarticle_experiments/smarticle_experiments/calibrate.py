@@ -109,6 +109,9 @@ _NOT_FITTED = {'time_step', 'control_tick', 'plate_size', 'plate_thickness', 'ma
 _BOUNDS: dict[str, tuple[float, float]] = {
     'friction_body_plate': (0.05, 1.0), 'friction_robot_robot': (0.05, 1.0), 'restitution': (0.0, 1.0),
     'servo_bandwidth': (20.0, 1000.0),
+    # rad/s: the default is the slowest servo whose 180 deg stroke of the 90 deg gait fits a quarter of the 1.6 s
+    # period (``GaitConfig``), so the default bounds run from it up to twice it
+    'servo_speed': (PRESETS['small'].servo_speed, 2.0 * PRESETS['small'].servo_speed),
 }
 
 
@@ -149,6 +152,23 @@ def parse_fit(text: str) -> list[Parameter]:
     if not out:
         raise BagFitError('--fit names no parameter')
     return out
+
+
+def check_bounds(params: Sequence[Parameter], runs: Sequence[BagRun]) -> None:
+    """BagFitError if a bound of ``servo_speed`` is too slow for a run's gait: a stroke of 2 alpha_max must take
+    at most a quarter period (``GaitConfig``), so the fit could not build that run's scene there."""
+    from smarticle_common.gait import GaitError
+
+    for param in params:
+        if param.name != 'servo_speed':
+            continue
+        for run in runs:
+            try:
+                GaitConfig(run.alpha_max, run.period, param.lo)
+            except GaitError as err:
+                least = 8.0 * run.alpha_max / run.period
+                raise BagFitError(f'--fit servo_speed: its lower bound {param.lo:g} rad/s is too slow for the gait '
+                                  f'of {run.name} ({err}); give servo_speed=LO:HI with LO >= {least:.4g}') from None
 
 
 @dataclass(frozen=True)

@@ -89,6 +89,7 @@ def run(ns: argparse.Namespace) -> int:
             if not Path(bag).exists():
                 raise cal.BagFitError(f'bag {bag} does not exist')
             runs.append(cal.load_run(bag, ns.period, ns.alpha_max_deg, ns.duration))
+        cal.check_bounds(params, runs)
     except (cal.BagFitError, ConfigError) as err:
         return _fail(str(err))
     for r in runs:

@@ -209,6 +209,9 @@ def test_bad_input_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str
     code, err = _run_cli([str(bag), '--preset', 'tiny'], capsys)
     assert code == 2 and err.count('\n') == 1 and 'tiny' in err
 
+    code, err = _run_cli([str(bag), '--fit', 'servo_speed=3:15', '--alpha-max-deg', '90'], capsys)
+    assert code == 2 and err.count('\n') == 1 and 'too slow for the gait' in err and 'LO >= 7.854' in err
+
 
 def test_the_demo_takes_a_preset_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     from smarticle_bringup.demo import build_parser, main, plan_parts, write_params
