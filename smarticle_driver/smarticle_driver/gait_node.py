@@ -174,8 +174,12 @@ class GaitNode(Node):
         self.on_tick()
 
     def on_halt(self, msg: Any) -> None:
-        """Hold the arms now and send the hold command at once."""
-        if self.gait.halt(self.gait_clock(self.now_seconds())):
+        """Hold the arms now and send the hold command at once.
+
+        Now is the instant ``on_tick`` evaluates (plus ``TIME_EPS``): on sim time a halt often comes at the time
+        of the last tick (the clock moves once per /clock message), and the gait has been evaluated there.
+        """
+        if self.gait.halt(self.gait_clock(self.now_seconds()) + TIME_EPS):
             self.halts += 1
             self.on_tick()
 

@@ -151,3 +151,21 @@ class PhysicsTimer:
         from smarticle_sim.physics import Physics
 
         Physics.step = self._saved  # type: ignore[method-assign]
+
+
+def stack_params(out: Path, plate_size: float) -> Path:
+    """The shipped config/stack.yaml with the sim bridge's ``preset`` a preset file of the small robot on a
+    ``plate_size`` m plate (both written to ``out``); the path of the params file (``params_file:=``). The
+    preset file is ``out/plate_preset.yaml``, which the batch core takes as its ``preset``."""
+    import yaml
+
+    from smarticle_bringup.launch_files import package_share
+
+    out.mkdir(parents=True, exist_ok=True)
+    preset = out / 'plate_preset.yaml'
+    preset.write_text(yaml.safe_dump({'preset': 'small', 'physics': {'plate_size': plate_size}, 'robot': {}}))
+    params = yaml.safe_load((package_share('smarticle_bringup') / 'config' / 'stack.yaml').read_text())
+    params['/sim_bridge'] = {'ros__parameters': {'preset': str(preset)}}
+    path = out / 'plate_stack.yaml'
+    path.write_text(yaml.safe_dump(params))
+    return path

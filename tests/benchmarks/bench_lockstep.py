@@ -106,10 +106,13 @@ def batch_rtf(robots: int, duration: float, feedback: bool, preset: str = 'small
 
 
 def ros_rtf(mode: str, executor: str, robots: int, duration: float, feedback: bool, log_dir: Path,
-            profile: Path | None = None) -> tuple[float, float, float, str, str]:
+            profile: Path | None = None, params_file: Path | None = None) -> tuple[float, float, float, str, str]:
     """x real time of the sim stack in ``mode`` ('composed' or 'separate'): (per wall second, per CPU second
-    of the bridge's process, % of the wall time the bridge spent in the physics, final poses digest, note)."""
+    of the bridge's process, % of the wall time the bridge spent in the physics, final poses digest, note).
+    ``params_file``: the stack's parameter file instead of the shipped config/stack.yaml."""
     words = [f'robots:={robots}', f'duration:={duration!r}', f'feedback:={str(feedback).lower()}']
+    if params_file is not None:
+        words.append(f'params_file:={params_file}')
     domain = DomainReservation()
     env = isolated_ros_env(domain.domain_id)
     try:

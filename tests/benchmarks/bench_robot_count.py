@@ -1,6 +1,7 @@
 """Cost against robot count: the composed lock-step stack and the batch core side by side, and where the time goes.
 
-For each robot count (dense scene, seed 1, the shipped stack.yaml; feedback on unless ``--no-feedback``) one
+For each robot count (dense scene, seed 1, the shipped stack.yaml, on the shipped 0.6 m plate up to 20 robots
+and a 2 m plate beyond; feedback on unless ``--no-feedback``) one
 run of the batch core (``Runner`` with the gait cores and the impact controllers, no ROS) and one of the
 composed lock-step stack (``smarticle-compose sim_stack.launch.xml``, EventsExecutor), interleaved, the same sim
 duration: x real time of each, the stack's share of the batch core (per wall and per CPU second), the share of
@@ -22,8 +23,19 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))   # the repository root: tests.* helpers
 
-from tests.benchmarks._common import machine_line, markdown_table, out_path, write_csv
+from tests.benchmarks._common import machine_line, markdown_table, out_path, stack_params, write_csv
 from tests.benchmarks.bench_lockstep import PERIOD, START_AT, batch_rtf, print_profile, ros_rtf
+
+#: The plate (m) of each run: the shipped 0.6 m up to ``SHIPPED_PLATE_ROBOTS`` robots, beyond it the 2 m plate of
+#: the dense50 spec (a dense scene of 50 robots reaches off the shipped plate); the stack and the batch core take
+#: the same plate (a preset file given to the sim bridge through the stack's params file).
+SHIPPED_PLATE_ROBOTS = 20
+LARGE_PLATE = 2.0
+
+
+def plate_for(robots: int) -> float:
+    """The plate side (m) for a run of ``robots`` robots."""
+    return 0.6 if robots <= SHIPPED_PLATE_ROBOTS else LARGE_PLATE
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -47,19 +59,23 @@ def main(argv: list[str] | None = None) -> int:
     rows: list[dict[str, Any]] = []
     with tempfile.TemporaryDirectory(prefix='bench_robot_count_') as work:
         for n in counts:
-            wall_b, cpu_b, digest_b = batch_rtf(n, duration, feedback)
+            plate = plate_for(n)
+            params = stack_params(Path(work) / f'plate_{n}', plate)
+            wall_b, cpu_b, digest_b = batch_rtf(n, duration, feedback, str(params.parent / 'plate_preset.yaml'))
             wall_s, cpu_s, physics, digest_s, note = ros_rtf('composed', 'events', n, duration, feedback,
-                                                             Path(work) / f'{n}')
-            rows.append({'robots': n, 'batch': wall_b, 'stack': wall_s, 'of_batch': wall_s / wall_b,
+                                                             Path(work) / f'{n}', params_file=params)
+            rows.append({'robots': n, 'plate': plate, 'batch': wall_b, 'stack': wall_s, 'of_batch': wall_s / wall_b,
                          'cpu_of_batch': cpu_s / cpu_b, 'physics': physics,
                          'poses': 'equal' if digest_s == digest_b else 'DIFFER', 'note': note})
             print(f'{n} robots: batch x {wall_b:.2f}, stack x {wall_s:.2f} real time ({wall_s / wall_b:.2f} of the '
                   f'batch core), physics {physics:.0f}% of the bridge\'s wall', flush=True)
         if args.profile:
             profile = out_path('robot_count_composed.pstats')
-            ros_rtf('composed', 'events', max(counts), duration, feedback, Path(work) / 'profile', profile)
+            ros_rtf('composed', 'events', max(counts), duration, feedback, Path(work) / 'profile', profile,
+                    params_file=stack_params(Path(work) / 'plate_profile', plate_for(max(counts))))
     print()
-    print(markdown_table(rows, [('robots', 'robots', 'd'), ('batch', 'batch core x real time', '.2f'),
+    print(markdown_table(rows, [('robots', 'robots', 'd'), ('plate', 'plate (m)', '.1f'),
+                                ('batch', 'batch core x real time', '.2f'),
                                 ('stack', 'composed stack x real time', '.2f'),
                                 ('of_batch', 'stack of the batch core', '.2f'),
                                 ('cpu_of_batch', 'per CPU second, of the batch', '.2f'),

@@ -39,7 +39,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[2]))   # the repository 
 
 from smarticle_common.launching import DomainReservation, executable, isolated_ros_env
 
-from tests.benchmarks._common import machine_line, markdown_table, out_path, write_csv
+from tests.benchmarks._common import machine_line, markdown_table, out_path, stack_params, write_csv
 
 PUBLISHED = re.compile(r'final poses: sha256 ([0-9a-f]{64}); published: /clock (\d+), /smarticles/poses (\d+)')
 RTF = re.compile(r'done at sim time ([\d.]+) s, real-time factor ([\d.]+)')
@@ -133,22 +133,6 @@ def bag_counts(bag: Path) -> dict[str, int]:
     return {name: info.message_count for name, info in BagReader(bag).topics.items()}
 
 
-def stack_params(out: Path, plate_size: float) -> Path:
-    """The shipped stack.yaml with the sim bridge's ``preset`` a preset file of the small robot on a
-    ``plate_size`` m plate (both written to ``out``); the path of the params file."""
-    import yaml
-
-    from smarticle_bringup.launch_files import package_share
-
-    preset = out / 'soak_preset.yaml'
-    preset.write_text(yaml.safe_dump({'preset': 'small', 'physics': {'plate_size': plate_size}, 'robot': {}}))
-    params = yaml.safe_load((package_share('smarticle_bringup') / 'config' / 'stack.yaml').read_text())
-    params['/sim_bridge'] = {'ros__parameters': {'preset': str(preset)}}
-    path = out / 'soak_stack.yaml'
-    path.write_text(yaml.safe_dump(params))
-    return path
-
-
 def soak(duration: float, robots: int, sample: float, out: Path, plate_size: float = 0.6) -> SoakResult:
     """Run the soak in ``out`` (bag, logs) on a ``plate_size`` m plate; return what it measured."""
     import psutil
@@ -193,7 +177,7 @@ def soak(duration: float, robots: int, sample: float, out: Path, plate_size: flo
     result.bag_ok = check.returncode == 0
     said = (check.stdout + check.stderr).strip().splitlines()
     result.bag_check = said[-1] if said else f'exit {check.returncode}'
-    result.batch_digest = batch_rtf(robots, duration, True, str(out / 'soak_preset.yaml'))[2]
+    result.batch_digest = batch_rtf(robots, duration, True, str(out / 'plate_preset.yaml'))[2]
     return result
 
 

@@ -184,3 +184,38 @@ def test_a_wall_clock_start_at_starts_the_gait_there(nodes, ros_node) -> None:  
     assert len(started) > 20
     assert all(pos == pytest.approx(reference.command(t).targets, abs=1e-9) for t, pos in started)
     assert f'starting at t = {t0:.3f} s' in nodes.output(proc)
+
+
+@pytest.mark.integration
+def test_a_halt_at_the_time_of_the_last_tick_holds_the_arms(ros_node) -> None:  # type: ignore[no-untyped-def]
+    """On sim time the clock moves once per /clock message, so a halt (free-running mode) often comes at the
+    very time of the gait's last tick: it holds the arms there (it used to stop the node, 'time went
+    backwards')."""
+    import rclpy
+    from rclpy.parameter import Parameter
+    from rosgraph_msgs.msg import Clock
+    from std_msgs.msg import Header
+
+    from smarticle_driver.gait_node import GaitNode
+
+    probe = ros_node('clock_probe')
+    clock_pub = probe.create_publisher(Clock, '/clock', 10)
+    node = GaitNode(parameter_overrides=[Parameter('use_sim_time', value=True), Parameter('autostart', value=True),
+                                         Parameter('tick_rate', value=1.0)])
+    try:
+        stamp = Clock()
+        stamp.clock.sec, stamp.clock.nanosec = 2, 337_500_000      # a time inside a gait quarter
+        deadline = time.monotonic() + 10.0
+        while node.get_clock().now().nanoseconds != 2_337_500_000 and time.monotonic() < deadline:
+            clock_pub.publish(stamp)
+            rclpy.spin_once(node, timeout_sec=0.05)
+        assert node.get_clock().now().nanoseconds == 2_337_500_000, 'the node never took the sim time'
+        node.on_tick()                                   # starts the gait and evaluates it at now
+        moving = node._last_targets                      # the corner the tick's command sent the arms to
+        node.on_halt(Header())                           # a halt at the same sim time
+        assert node.halts == 1
+        held = node.gait.command(node.gait_clock(node.now_seconds()) + 0.01)
+        assert held.halted and held.targets == held.positions
+        assert moving is not None and moving != held.targets   # on its way to a corner: now it holds
+    finally:
+        node.destroy_node()
