@@ -292,6 +292,11 @@ def write_params(part: Part, args: argparse.Namespace, path: Path) -> dict[str, 
     return shared
 
 
+def node_names(node: Any) -> list[str]:
+    """The fully qualified names of the nodes ``node`` sees in the ROS graph now."""
+    return [f'{ns.rstrip("/")}/{name}' for name, ns in node.get_node_names_and_namespaces()]
+
+
 @dataclass
 class StackRun:
     """What the demo received from one part's run: times (s after the gait start), poses (T, N, 3), arm angles
@@ -397,7 +402,7 @@ def run_stack(part: Part, args: argparse.Namespace, folder: Path) -> StackRun:
             rclpy.spin_once(node, timeout_sec=0.05)
             if len(graph) < expected_nodes:     # the fullest view of the graph, from the start (a short run on a
                 # loaded machine can end before discovery has shown every node that was up while it waited)
-                now_seen = [f'{ns.rstrip("/")}/{name}' for name, ns in node.get_node_names_and_namespaces()]
+                now_seen = node_names(node)
                 graph = now_seen if len(now_seen) > len(graph) else graph
             if time.monotonic() - last > 5.0 and samples:
                 last = time.monotonic()
@@ -410,7 +415,7 @@ def run_stack(part: Part, args: argparse.Namespace, folder: Path) -> StackRun:
         deadline = time.monotonic() + 2.0   # the monitor and the recorder outlive the bridge until launch.stop()
         while len(graph) < expected_nodes and time.monotonic() < deadline:
             rclpy.spin_once(node, timeout_sec=0.05)
-            now_seen = [f'{ns.rstrip("/")}/{name}' for name, ns in node.get_node_names_and_namespaces()]
+            now_seen = node_names(node)
             graph = now_seen if len(now_seen) > len(graph) else graph + [n for n in now_seen if n not in graph]
         trouble = ''
         code = driver.proc.returncode

@@ -25,7 +25,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
-from smarticle_common.facts import GAIT_PERIOD, PRESETS, R_BIND_BL, RobotSpec
+from smarticle_common.facts import GAIT_PERIOD, R_BIND_BL, RobotSpec
 from smarticle_common.gait import GaitConfig
 from smarticle_tracking.gliders import MIN_PERIODS, TRAVEL_MIN_W_PER_100
 
@@ -65,9 +65,9 @@ class DemoScene:
     @property
     def spec(self) -> RobotSpec:
         """The robot of this scene (of its preset file's overrides when ``preset`` is a preset file)."""
-        from smarticle_sim.config_builder import build_config, is_preset_file
+        from smarticle_sim.config_builder import build_config
 
-        return build_config(self.preset).robot if is_preset_file(self.preset) else PRESETS[self.preset]
+        return build_config(self.preset).robot
 
     def gait(self) -> GaitConfig:
         """The gait of both robots (phase 0; each robot's phase is in ``start.phases``)."""

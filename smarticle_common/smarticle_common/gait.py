@@ -72,7 +72,7 @@ class GaitConfig:
             raise GaitError(f'servo_speed must be positive (rad/s), got {self.servo_speed!r}')
         if not (math.isfinite(self.phase) and 0.0 <= self.phase < 1.0):
             raise GaitError(f'phase must be a fraction of a period in [0, 1), got {self.phase!r}')
-        stroke_time = 2.0 * self.alpha_max / self.servo_speed
+        stroke_time = 2.0 * self.alpha_max / self.servo_speed   # at least a quarter period at slowest_servo()
         if stroke_time > self.period / 4.0 + 1e-9:
             raise GaitError(
                 f'a {math.degrees(2 * self.alpha_max):g} degree stroke at {self.servo_speed:g} rad/s takes '
@@ -247,6 +247,12 @@ class SquareGait:
         delta = goal - start
         moved = goal if abs(delta) <= reach else start + math.copysign(reach, delta)
         return (moved, self._pos0[1]) if arm == 0 else (self._pos0[0], moved)
+
+
+def slowest_servo(alpha_max: float, period: float) -> float:
+    """The slowest servo speed (rad/s) ``GaitConfig`` accepts for amplitude ``alpha_max`` (rad) and ``period``
+    (s): its stroke of 2 alpha_max takes a quarter period."""
+    return 8.0 * alpha_max / period
 
 
 def check_start_time(start: float, now: float, period: float) -> None:

@@ -157,7 +157,7 @@ def parse_fit(text: str) -> list[Parameter]:
 def check_bounds(params: Sequence[Parameter], runs: Sequence[BagRun]) -> None:
     """BagFitError if a bound of ``servo_speed`` is too slow for a run's gait: a stroke of 2 alpha_max must take
     at most a quarter period (``GaitConfig``), so the fit could not build that run's scene there."""
-    from smarticle_common.gait import GaitError
+    from smarticle_common.gait import GaitError, slowest_servo
 
     for param in params:
         if param.name != 'servo_speed':
@@ -166,7 +166,7 @@ def check_bounds(params: Sequence[Parameter], runs: Sequence[BagRun]) -> None:
             try:
                 GaitConfig(run.alpha_max, run.period, param.lo)
             except GaitError as err:
-                least = 8.0 * run.alpha_max / run.period
+                least = slowest_servo(run.alpha_max, run.period)
                 raise BagFitError(f'--fit servo_speed: its lower bound {param.lo:g} rad/s is too slow for the gait '
                                   f'of {run.name} ({err}); give servo_speed=LO:HI with LO >= {least:.4g}') from None
 
@@ -354,6 +354,17 @@ def bag_observables(run: BagRun, body_length: float) -> dict[str, FloatArray]:
     return _segment_observables(run.strobe[starts + 1], run.strobe[starts + 1 + seg], fsr, body_length)
 
 
+def measured_clocks(run: BagRun) -> Callable[[Any, Any], list[Any]]:
+    """``run_trial``'s ``controllers`` hook that runs each robot's gait clock at its measured rate."""
+    rates = tuple(float(r) for r in run.rates)
+
+    def clocks(_physics: Any, gaits: Any) -> list[Any]:
+        gaits.clock_rates = rates
+        return []
+
+    return clocks
+
+
 def simulate(run: BagRun, config: SimConfig, engine: str = 'bullet') -> dict[str, FloatArray]:
     """The sim's observables of the run: each segment simulated from the bag's poses at its start (one
     burn-in period, then the ``SEGMENT_PERIODS`` compared), with each robot's measured clock rate. Restarting
@@ -362,13 +373,8 @@ def simulate(run: BagRun, config: SimConfig, engine: str = 'bullet') -> dict[str
     from smarticle_sim.engines import engine_factory
 
     seg = SEGMENT_PERIODS
-    rates = run.rates
     want_fsr = run.fsr_peaks is not None
-
-    def clocks(_physics: Any, gaits: Any) -> list[Any]:
-        gaits.clock_rates = tuple(float(r) for r in rates)   # each robot's measured gait clock
-        return []
-
+    clocks = measured_clocks(run)
     firsts, lasts, peaks = [], [], []
     for s in segment_starts(run):
         # FSR: every control tick, so each period's peak is the peak over all its ticks (the bag's sampled peaks)
@@ -404,14 +410,8 @@ def simulate_whole(run: BagRun, config: SimConfig, engine: str = 'bullet') -> Fl
     from smarticle_sim.batch import run_trial
     from smarticle_sim.engines import engine_factory
 
-    rates = run.rates
-
-    def clocks(_physics: Any, gaits: Any) -> list[Any]:
-        gaits.clock_rates = tuple(float(r) for r in rates)   # each robot's measured gait clock
-        return []
-
     at = first_seen(run)
-    rec = run_trial(config, scene_of(run, config, at), float(run.periods - at), controllers=clocks,
+    rec = run_trial(config, scene_of(run, config, at), float(run.periods - at), controllers=measured_clocks(run),
                     engine=engine_factory(engine))
     out = np.full_like(run.strobe, np.nan)
     out[at:] = _strobe(np.asarray(rec.time), np.asarray(rec.poses), run.period * np.arange(run.periods - at + 1))

@@ -388,7 +388,9 @@ def spec_from_mapping(data: Any, source: str = '') -> ExperimentSpec:
         if known is not None and 'preset' not in known.defaults:
             raise SpecError(f'{name}: preset is not supported by kind {kind!r}')
         base['preset'] = data['preset']
-        if str(data['preset']).endswith(('.yaml', '.yml')):     # a preset file (config_builder.is_preset_file)
+        from smarticle_sim.config_builder import is_preset_file
+
+        if is_preset_file(data['preset']):
             _inline_preset_file(name, known, base)
     if 'periods' in data:
         _check_positive(name, 'periods', data['periods'])

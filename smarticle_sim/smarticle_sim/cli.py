@@ -24,11 +24,11 @@ from smarticle_common.runs import save_npz
 from .batch import plot_trajectories, run_trial
 from .drift import format_phase_drift, phase_drift
 from .benchmark import benchmark, format_table
-from .errors import ConfigError, SimError
+from .errors import SimError
 from .scenes import Scene, build_scene
 from smarticle_common.facts import GAIT_PERIOD, PRESETS
 
-from .config_builder import build_config, is_preset_file
+from .config_builder import build_config
 from .settings import NoiseConfig, SimConfig
 from smarticle_common.cli import add_version, closed_pipe_safe
 
@@ -98,9 +98,6 @@ def config_from_args(args: argparse.Namespace) -> SimConfig:
     given = (('time_step', args.time_step), ('control_tick', args.control_tick),
              ('solver_iterations', args.solver_iterations))
     physics = {name: value for name, value in given if value is not None}
-    if not is_preset_file(args.preset) and args.preset not in PRESETS:
-        raise ConfigError(f'--preset {args.preset!r} is no robot preset ({", ".join(sorted(PRESETS))}) and no '
-                          'preset file (a .yaml or .yml path)')
     return build_config(args.preset, physics, noise=noise_from_args(args))
 
 

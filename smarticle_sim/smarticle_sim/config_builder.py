@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from smarticle_common.errors import RobotSpecError
-from smarticle_common.facts import RobotSpec, robot_preset
+from smarticle_common.facts import PRESETS, RobotSpec, robot_preset
 
 from .diagnostics import Diagnostics
 from .engine import ENGINE_NAMES
@@ -125,6 +125,9 @@ def build_config(preset: str = 'small', physics: Mapping[str, Any] | None = None
     check_names('diagnostics', diagnostics)
     if engine not in CONFIG_ENGINES:
         raise ConfigError(f'unknown engine {engine!r}: one of {", ".join(CONFIG_ENGINES)}')
+    if str(preset) not in PRESETS:
+        raise ConfigError(f'robot preset {str(preset)!r} is unknown: one of {", ".join(sorted(PRESETS))}, or a '
+                          'preset file (a .yaml or .yml path)')
     try:
         spec = replace(robot_preset(str(preset)), **dict(robot or {}))
     except RobotSpecError as err:

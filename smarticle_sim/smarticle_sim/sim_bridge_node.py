@@ -361,9 +361,7 @@ class SimBridgeNode(Node):
                 if ahead > 0:
                     time.sleep(ahead)
                 lateness.add(time.monotonic() - wall0 - due)   # when the tick's publication begins
-                self.publish_outputs()
-            else:
-                self.publish_outputs()
+            self.publish_outputs()
             wall = time.monotonic()
             if wall - last_diag >= 1.0:
                 rtf = (self.core.time - sim0) / max(wall - wall0, 1e-9)
