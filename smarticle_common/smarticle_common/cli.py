@@ -24,6 +24,8 @@ __all__ = ['SeedSyntaxError', 'add_version', 'closed_pipe_safe', 'parse_seeds', 
 
 #: Exit code of a process ended by SIGPIPE, as a shell reports it (128 + 13).
 EXIT_CLOSED_PIPE = 141
+#: Exit code of a process ended by Ctrl-C (SIGINT), as a shell reports it (128 + 2).
+EXIT_INTERRUPTED = 130
 
 R = TypeVar('R')
 
@@ -46,7 +48,8 @@ def add_version(parser: ArgumentParser, distribution: str) -> None:
 
 
 def closed_pipe_safe(main: Callable[..., R]) -> Callable[..., R | int]:
-    """Wrap a console ``main`` so that a reader closing the pipe early ends it quietly (exit code 141).
+    """Wrap a console ``main`` so that a reader closing the pipe early ends it quietly (exit code 141), and
+    Ctrl-C one that has not handled it itself with one line on stderr (``PROG: interrupted``, exit code 130).
 
     Python raises ``BrokenPipeError`` on the next write or at the final flush; both are caught, and
     stdout is pointed at ``/dev/null`` so the interpreter's own flush at exit does not print a traceback.
@@ -61,6 +64,9 @@ def closed_pipe_safe(main: Callable[..., R]) -> Callable[..., R | int]:
             devnull = os.open(os.devnull, os.O_WRONLY)
             os.dup2(devnull, sys.stdout.fileno())
             return EXIT_CLOSED_PIPE
+        except KeyboardInterrupt:
+            sys.stderr.write(f'{os.path.basename(sys.argv[0]) or "python"}: interrupted\n')
+            return EXIT_INTERRUPTED
     return wrapped
 
 

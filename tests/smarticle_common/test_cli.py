@@ -50,3 +50,18 @@ def test_closed_pipe_ends_quietly() -> None:
                           timeout=60)
     assert proc.stdout == 'line 0\n'
     assert 'Traceback' not in proc.stderr and 'BrokenPipe' not in proc.stderr
+
+
+def test_ctrl_c_ends_a_console_main_with_one_line() -> None:
+    """A main that has not handled Ctrl-C itself: one line naming the program, exit code 130, no traceback."""
+    code = ('import os, signal\n'
+            'from smarticle_common.cli import closed_pipe_safe\n'
+            '@closed_pipe_safe\n'
+            'def main():\n'
+            '    os.kill(os.getpid(), signal.SIGINT)\n'
+            '    while True:\n'
+            '        pass\n'
+            'raise SystemExit(main())\n')
+    proc = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 130
+    assert proc.stderr.strip().splitlines() == ['-c: interrupted']
